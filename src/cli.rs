@@ -1,0 +1,297 @@
+//! The command line: one subcommand per computation, JSON formats of `shared/spec/benchmark.md`.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context as _, bail};
+use clap::{Args, Parser, Subcommand};
+
+use crate::accuracy::{case_errors, cost, format_table};
+use crate::cases::{Bc, benchmark_cases};
+use crate::fem::FemModel;
+use crate::grid::Grid;
+use crate::io::{CaseRecord, DisplacementFile, read_json, write_json_atomic};
+use crate::material::Material;
+use crate::msm::{MsmModel, MsmParams, statics};
+
+/// tissue-sim: anisotropic soft-tissue cube, FEM reference and calibrated mass-spring model.
+#[derive(Debug, Parser)]
+#[command(name = "tissue-sim", version, about, long_about = None)]
+pub struct Cli {
+    /// What to compute; without one, prints the paper's error tables for its own parameters.
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+#[allow(missing_docs)] // flattened argument groups document their own fields
+pub enum Command {
+    /// Linear static FEM reference: the 9 clamped or 9 patch cases, node displacements as JSON.
+    Fem {
+        #[command(flatten)]
+        object: ObjectArgs,
+        /// Boundary conditions.
+        #[arg(long, value_enum, default_value = "clamped")]
+        bc: Bc,
+        #[command(flatten)]
+        grid: GridArgs,
+        /// Output JSON file.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Static MSM equilibrium of the 9 clamped cases, node displacements as JSON.
+    Msm {
+        #[command(flatten)]
+        object: ObjectArgs,
+        #[command(flatten)]
+        params: ParamArgs,
+        #[command(flatten)]
+        grid: GridArgs,
+        /// Output JSON file.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// The paper's Table IV/V: average and maximum nodal MSM-vs-FEM error, % of h, per case.
+    Errors {
+        #[command(flatten)]
+        object: ObjectArgs,
+        #[command(flatten)]
+        params: ParamArgs,
+        /// Read the parameters (and the object, unless given) from a calibration result JSON.
+        #[arg(long = "params", value_name = "FILE.json", conflicts_with_all = ["k1", "k2", "k3", "d", "c12", "c13", "c23"])]
+        params_file: Option<PathBuf>,
+        #[command(flatten)]
+        grid: GridArgs,
+        /// Print JSON instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Speed benchmark of the physics core (release build).
+    Bench {
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// Which material: a preset object or a file.
+#[derive(Debug, Args)]
+pub struct ObjectArgs {
+    /// The paper's object: A (orthotropic) or B (transversely isotropic).
+    #[arg(long, value_parser = ["A", "B"], ignore_case = true, conflicts_with = "material")]
+    pub object: Option<String>,
+    /// A material file (TOML, or JSON by extension), see README.
+    #[arg(long)]
+    pub material: Option<PathBuf>,
+}
+
+/// Grid resolution.
+#[derive(Debug, Args)]
+pub struct GridArgs {
+    /// Nodes per axis (the paper: 8).
+    #[arg(long, default_value_t = 8)]
+    pub nodes: usize,
+}
+
+/// MSM parameters on the command line.
+#[derive(Debug, Args)]
+pub struct ParamArgs {
+    /// Axis-1 spring stiffness, N/m.
+    #[arg(long, allow_negative_numbers = true)]
+    pub k1: Option<f64>,
+    /// Axis-2 spring stiffness, N/m.
+    #[arg(long, allow_negative_numbers = true)]
+    pub k2: Option<f64>,
+    /// Axis-3 spring stiffness, N/m (equal to k2 for a transversely isotropic object).
+    #[arg(long, allow_negative_numbers = true)]
+    pub k3: Option<f64>,
+    /// Nodal damping, N s/m (no effect on a static answer).
+    #[arg(long, allow_negative_numbers = true)]
+    pub d: Option<f64>,
+    /// Face-diagonal stiffness, 1-2 plane, N/m (shear model).
+    #[arg(long, allow_negative_numbers = true)]
+    pub c12: Option<f64>,
+    /// Face-diagonal stiffness, 1-3 plane, N/m (shear model; = c12 for transversely isotropic).
+    #[arg(long, allow_negative_numbers = true)]
+    pub c13: Option<f64>,
+    /// Face-diagonal stiffness, 2-3 plane, N/m (shear model).
+    #[arg(long, allow_negative_numbers = true)]
+    pub c23: Option<f64>,
+}
+
+impl ObjectArgs {
+    /// The chosen material, or `fallback` (an object label from a file) when none is given.
+    fn material(&self, fallback: Option<&str>) -> anyhow::Result<Material> {
+        if let Some(path) = &self.material {
+            return Ok(Material::from_file(path)?);
+        }
+        let name = self.object.as_deref().or(fallback).context("give --object A|B or --material FILE")?;
+        Material::preset(&name.to_ascii_uppercase())
+            .with_context(|| format!("unknown object {name:?}: the presets are A and B (or use --material FILE)"))
+    }
+}
+
+impl GridArgs {
+    fn grid(&self) -> anyhow::Result<Grid> {
+        Grid::new(self.nodes).context("invalid --nodes")
+    }
+}
+
+impl ParamArgs {
+    /// Completes and checks the parameters for `material`: `k3` (and `c13`) default to `k2`
+    /// (`c12`) for a transversely isotropic object and must equal them if given.
+    pub fn resolve(&self, material: &Material) -> anyhow::Result<MsmParams> {
+        let k1 = self.k1.context("missing --k1")?;
+        let k2 = self.k2.context("missing --k2")?;
+        let ti = material.is_transversely_isotropic();
+        let k3 = match (self.k3, ti) {
+            (Some(k3), true) if k3 != k2 => {
+                bail!("object {} is transversely isotropic: --k3 must equal --k2 (or be left out)", material.name)
+            }
+            (Some(k3), _) => k3,
+            (None, true) => k2,
+            (None, false) => bail!("missing --k3 (object {} is orthotropic)", material.name),
+        };
+        let mut p = MsmParams::axis(k1, k2, k3, self.d.unwrap_or(0.0));
+        if self.c12.is_some() || self.c13.is_some() || self.c23.is_some() {
+            let c12 = self.c12.context("the shear model needs --c12")?;
+            let c23 = self.c23.context("the shear model needs --c23")?;
+            let c13 = match (self.c13, ti) {
+                (Some(c13), true) if c13 != c12 => {
+                    bail!("object {} is transversely isotropic: --c13 must equal --c12", material.name)
+                }
+                (Some(c13), _) => c13,
+                (None, true) => c12,
+                (None, false) => bail!("the shear model needs --c13 (object {} is orthotropic)", material.name),
+            };
+            (p.c12, p.c13, p.c23) = (Some(c12), Some(c13), Some(c23));
+        }
+        p.validate()?;
+        Ok(p)
+    }
+}
+
+/// The keys of a calibration result that `errors --params-file` reads.
+#[derive(Debug, serde::Deserialize)]
+struct ParamsFile {
+    object: Option<String>,
+    params: MsmParams,
+}
+
+/// Runs the command line and maps errors to a message and exit code 1.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Runs one parsed command.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        None => overview(),
+        Some(Command::Fem { object, bc, grid, out }) => {
+            let material = object.material(None)?;
+            let grid = grid.grid()?;
+            let cases = benchmark_cases(&grid, &material.name, bc);
+            let sols = FemModel::new(grid, &material).solve_cases(&cases)?;
+            let file = DisplacementFile {
+                object: material.name.clone(),
+                bc: bc.name().into(),
+                model: "fem".into(),
+                nodes_per_axis: grid.n(),
+                cases: sols.iter().map(CaseRecord::from_solution).collect(),
+                params: None,
+            };
+            write_json_atomic(&out, &file)
+        }
+        Some(Command::Msm { object, params, grid, out }) => {
+            let material = object.material(None)?;
+            let params = params.resolve(&material)?;
+            let grid = grid.grid()?;
+            let model = MsmModel::new(grid, params, material.density)?;
+            let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
+            let sols = statics::solve_cases(&model, &cases)?;
+            let file = DisplacementFile {
+                object: material.name.clone(),
+                bc: Bc::Clamped.name().into(),
+                model: "msm".into(),
+                nodes_per_axis: grid.n(),
+                cases: sols.iter().map(CaseRecord::from_solution).collect(),
+                params: Some(params),
+            };
+            write_json_atomic(&out, &file)
+        }
+        Some(Command::Errors { object, params, params_file, grid, json }) => {
+            let (material, params) = match params_file {
+                Some(path) => {
+                    let file: ParamsFile = read_json(&path)?;
+                    let material = object.material(file.object.as_deref())?;
+                    file.params.validate().with_context(|| format!("in {}", path.display()))?;
+                    (material, file.params)
+                }
+                None => {
+                    let material = object.material(None)?;
+                    let p = params.resolve(&material)?;
+                    (material, p)
+                }
+            };
+            errors(&material, params, grid.grid()?, json)
+        }
+        Some(Command::Bench { json }) => {
+            let report = crate::bench::run()?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", report.to_text());
+            }
+            Ok(())
+        }
+    }
+}
+
+fn errors(material: &Material, params: MsmParams, grid: Grid, json: bool) -> anyhow::Result<()> {
+    let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
+    let fem = FemModel::new(grid, material).solve_cases(&cases)?;
+    let model = MsmModel::new(grid, params, material.density)?;
+    let msm = statics::solve_cases(&model, &cases)?;
+    let errs = case_errors(grid.h(), &msm, &fem);
+    let total = cost(&msm, &fem);
+    if json {
+        let v = serde_json::json!({
+            "object": material.name,
+            "nodes_per_axis": grid.n(),
+            "params": params,
+            "cost": total,
+            "cases": errs,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        let title = format!("Object {} ({:?} MSM, cost {total:.6e} m)", material.name, params.topology());
+        print!("{}", format_table(&title, &errs));
+    }
+    Ok(())
+}
+
+/// Without a subcommand: the viewer is not built yet, so say so and show the paper's tables.
+fn overview() -> anyhow::Result<()> {
+    println!(
+        "tissue-sim: the interactive viewer is not part of this build yet.\n\
+         Headless commands: fem, msm, errors, bench (tissue-sim --help).\n\
+         The paper's Table III parameters against this program's FEM reference:\n"
+    );
+    let grid = Grid::paper();
+    errors(&Material::object_a(), MsmParams::axis(968.2, 1010.0, 1137.7, 795.3), grid, false)?;
+    println!();
+    errors(&Material::object_b(), MsmParams::axis(735.5, 679.9, 679.9, 537.2), grid, false)
+}
+
+/// Used by tests: the displacement file at `path`.
+pub fn read_displacements(path: &Path) -> anyhow::Result<DisplacementFile> {
+    read_json(path)
+}

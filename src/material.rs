@@ -1,0 +1,460 @@
+//! Linear-elastic anisotropic materials: engineering constants to compliance `S` and stiffness `C`.
+//!
+//! Voigt order is (11, 22, 33, 23, 13, 12) with engineering shear strain `gamma_ij = 2 eps_ij`
+//! (`shared/spec/benchmark.md`). All moduli are in Pa, density in kg/m^3.
+//!
+//! `nu_ij = -eps_j / eps_i` under uniaxial stress along `i`, so `nu_ij / E_i = nu_ji / E_j`.
+
+use std::path::Path;
+
+use nalgebra::Matrix6;
+use serde::Deserialize;
+
+/// Density of the paper's tissue, kg/m^3.
+pub const TISSUE_DENSITY: f64 = 1040.0;
+
+/// Errors raised while building or reading a material.
+#[derive(Debug, thiserror::Error)]
+pub enum MaterialError {
+    /// A constant is NaN or infinite.
+    #[error("material constant {name} is not a finite number ({value})")]
+    NotFinite {
+        /// Name of the constant, e.g. `E1`.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// A modulus or the density is zero or negative.
+    #[error("material constant {name} must be positive, got {value}")]
+    NonPositive {
+        /// Name of the constant.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// The stiffness matrix `C` is not positive definite.
+    #[error("material stiffness C is not positive definite: {0}")]
+    NotPositiveDefinite(String),
+    /// A material file could not be read.
+    #[error("cannot read material file {path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// A material file could not be parsed or misses a constant.
+    #[error("invalid material file {path}: {message}")]
+    Parse {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// The kind of anisotropy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Symmetry {
+    /// Nine independent constants.
+    Orthotropic,
+    /// Axis 1 distinct, the 2-3 plane isotropic: five independent constants.
+    TransverselyIsotropic,
+}
+
+/// The nine engineering constants of an orthotropic material, moduli in Pa.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[allow(missing_docs)] // the names are the standard symbols
+pub struct EngineeringConstants {
+    pub e1: f64,
+    pub e2: f64,
+    pub e3: f64,
+    pub nu12: f64,
+    pub nu13: f64,
+    pub nu23: f64,
+    pub g12: f64,
+    pub g13: f64,
+    pub g23: f64,
+}
+
+/// A validated linear-elastic material.
+#[derive(Debug, Clone)]
+pub struct Material {
+    /// Short label used in case ids (`A`, `B`, or a file's `name`).
+    pub name: String,
+    /// Orthotropic or transversely isotropic.
+    pub symmetry: Symmetry,
+    /// The engineering constants (for a transversely isotropic material, the derived ones filled in).
+    pub constants: EngineeringConstants,
+    /// Density, kg/m^3.
+    pub density: f64,
+    /// Compliance matrix `S` (1/Pa), Voigt order.
+    pub compliance: Matrix6<f64>,
+    /// Stiffness matrix `C = S^-1` (Pa), Voigt order, exactly symmetric.
+    pub stiffness: Matrix6<f64>,
+}
+
+fn check_finite(name: &'static str, value: f64) -> Result<(), MaterialError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(MaterialError::NotFinite { name, value })
+    }
+}
+
+fn check_positive(name: &'static str, value: f64) -> Result<(), MaterialError> {
+    check_finite(name, value)?;
+    if value > 0.0 {
+        Ok(())
+    } else {
+        Err(MaterialError::NonPositive { name, value })
+    }
+}
+
+impl EngineeringConstants {
+    /// Compliance matrix `S` in Voigt order (11, 22, 33, 23, 13, 12).
+    pub fn compliance(&self) -> Matrix6<f64> {
+        let mut s = Matrix6::zeros();
+        s[(0, 0)] = 1.0 / self.e1;
+        s[(1, 1)] = 1.0 / self.e2;
+        s[(2, 2)] = 1.0 / self.e3;
+        s[(0, 1)] = -self.nu12 / self.e1;
+        s[(1, 0)] = s[(0, 1)];
+        s[(0, 2)] = -self.nu13 / self.e1;
+        s[(2, 0)] = s[(0, 2)];
+        s[(1, 2)] = -self.nu23 / self.e2;
+        s[(2, 1)] = s[(1, 2)];
+        s[(3, 3)] = 1.0 / self.g23;
+        s[(4, 4)] = 1.0 / self.g13;
+        s[(5, 5)] = 1.0 / self.g12;
+        s
+    }
+
+    /// Checks every constant and the positive definiteness of `S` (equivalently `C`), naming the
+    /// constant or the condition at fault.
+    pub fn validate(&self) -> Result<(), MaterialError> {
+        for (name, v) in [("E1", self.e1), ("E2", self.e2), ("E3", self.e3)] {
+            check_positive(name, v)?;
+        }
+        for (name, v) in [("G12", self.g12), ("G13", self.g13), ("G23", self.g23)] {
+            check_positive(name, v)?;
+        }
+        for (name, v) in [("nu12", self.nu12), ("nu13", self.nu13), ("nu23", self.nu23)] {
+            check_finite(name, v)?;
+        }
+        // Leading 2x2 minors of the normal block of S: nu_ij^2 < E_i / E_j.
+        for (name, nu, ei, ej, ni, nj) in [
+            ("nu12", self.nu12, self.e1, self.e2, "E1", "E2"),
+            ("nu13", self.nu13, self.e1, self.e3, "E1", "E3"),
+            ("nu23", self.nu23, self.e2, self.e3, "E2", "E3"),
+        ] {
+            let bound = (ei / ej).sqrt();
+            if nu.abs() >= bound {
+                return Err(MaterialError::NotPositiveDefinite(format!(
+                    "|{name}| = {} must be below sqrt({ni}/{nj}) = {bound:.6}",
+                    nu.abs()
+                )));
+            }
+        }
+        let nu21 = self.nu12 * self.e2 / self.e1;
+        let nu31 = self.nu13 * self.e3 / self.e1;
+        let nu32 = self.nu23 * self.e3 / self.e2;
+        let det = 1.0
+            - self.nu12 * nu21
+            - self.nu23 * nu32
+            - self.nu13 * nu31
+            - 2.0 * nu21 * nu32 * self.nu13;
+        if det <= 0.0 {
+            return Err(MaterialError::NotPositiveDefinite(format!(
+                "1 - nu12 nu21 - nu23 nu32 - nu13 nu31 - 2 nu21 nu32 nu13 = {det:.6} must be positive \
+                 (nu12, nu13, nu23 are jointly too large)"
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Material {
+    /// An orthotropic material from its nine engineering constants (Pa) and density (kg/m^3).
+    pub fn orthotropic(
+        name: impl Into<String>,
+        constants: EngineeringConstants,
+        density: f64,
+    ) -> Result<Self, MaterialError> {
+        Self::build(name.into(), Symmetry::Orthotropic, constants, density)
+    }
+
+    /// A transversely isotropic material, axis 1 distinct and the 2-3 plane isotropic:
+    /// `E3 = E2`, `nu13 = nu12`, `G13 = G12`, `G23 = E2 / (2 (1 + nu23))`.
+    pub fn transversely_isotropic(
+        name: impl Into<String>,
+        e1: f64,
+        e2: f64,
+        nu12: f64,
+        nu23: f64,
+        g12: f64,
+        density: f64,
+    ) -> Result<Self, MaterialError> {
+        check_positive("E2", e2)?;
+        check_finite("nu23", nu23)?;
+        if nu23 <= -1.0 {
+            return Err(MaterialError::NotPositiveDefinite(format!(
+                "nu23 = {nu23} must exceed -1 so that G23 = E2 / (2 (1 + nu23)) is positive"
+            )));
+        }
+        let constants = EngineeringConstants {
+            e1,
+            e2,
+            e3: e2,
+            nu12,
+            nu13: nu12,
+            nu23,
+            g12,
+            g13: g12,
+            g23: e2 / (2.0 * (1.0 + nu23)),
+        };
+        Self::build(name.into(), Symmetry::TransverselyIsotropic, constants, density)
+    }
+
+    fn build(
+        name: String,
+        symmetry: Symmetry,
+        constants: EngineeringConstants,
+        density: f64,
+    ) -> Result<Self, MaterialError> {
+        constants.validate()?;
+        check_positive("density", density)?;
+        let compliance = constants.compliance();
+        let chol = compliance.cholesky().ok_or_else(|| {
+            MaterialError::NotPositiveDefinite("Cholesky factorisation of S failed".into())
+        })?;
+        let c = chol.inverse();
+        let stiffness = (c + c.transpose()) * 0.5;
+        if stiffness.cholesky().is_none() {
+            return Err(MaterialError::NotPositiveDefinite(
+                "Cholesky factorisation of C failed".into(),
+            ));
+        }
+        Ok(Self { name, symmetry, constants, density, compliance, stiffness })
+    }
+
+    /// The paper's orthotropic object A (Table II, kPa read as 1e3 Pa).
+    pub fn object_a() -> Self {
+        let k = 1e3;
+        let constants = EngineeringConstants {
+            e1: 179.0 * k,
+            e2: 188.0 * k,
+            e3: 228.0 * k,
+            nu12: 0.26,
+            nu13: 0.30,
+            nu23: 0.31,
+            g12: 57.1 * k,
+            g13: 65.8 * k,
+            g23: 71.1 * k,
+        };
+        // The constants are fixed and valid: a failure here is a programming error caught by tests.
+        Self::orthotropic("A", constants, TISSUE_DENSITY)
+            .unwrap_or_else(|e| unreachable!("object A preset is invalid: {e}"))
+    }
+
+    /// The paper's transversely isotropic object B (Table II, kPa read as 1e3 Pa).
+    pub fn object_b() -> Self {
+        let k = 1e3;
+        Self::transversely_isotropic("B", 170.0 * k, 115.0 * k, 0.46, 0.58, 33.0 * k, TISSUE_DENSITY)
+            .unwrap_or_else(|e| unreachable!("object B preset is invalid: {e}"))
+    }
+
+    /// A preset by its name, `A` or `B` (case-insensitive).
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "A" | "a" => Some(Self::object_a()),
+            "B" | "b" => Some(Self::object_b()),
+            _ => None,
+        }
+    }
+
+    /// Reads a material from a TOML or JSON file (chosen by extension; `.json` is JSON, anything
+    /// else TOML). See [`MaterialFile`] for the keys.
+    pub fn from_file(path: &Path) -> Result<Self, MaterialError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| MaterialError::Io { path: shown.clone(), source })?;
+        let is_json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        let file: MaterialFile = if is_json {
+            serde_json::from_str(&text)
+                .map_err(|e| MaterialError::Parse { path: shown.clone(), message: e.to_string() })?
+        } else {
+            toml::from_str(&text)
+                .map_err(|e| MaterialError::Parse { path: shown.clone(), message: e.to_string() })?
+        };
+        let default_name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("custom");
+        file.into_material(default_name)
+            .map_err(|e| match e {
+                MaterialError::Parse { message, .. } => MaterialError::Parse { path: shown, message },
+                other => other,
+            })
+    }
+
+    /// `true` for a transversely isotropic material (its MSM has `k3 = k2`).
+    pub fn is_transversely_isotropic(&self) -> bool {
+        self.symmetry == Symmetry::TransverselyIsotropic
+    }
+}
+
+/// The keys of a material file. Moduli are in `units` (`Pa` by default, or `kPa`), density in kg/m^3.
+///
+/// ```toml
+/// name = "liver"                   # optional, the file stem otherwise
+/// symmetry = "orthotropic"         # or "transversely_isotropic"
+/// units = "kPa"                    # optional, "Pa" by default
+/// density = 1040.0                 # optional, 1040 kg/m^3 by default
+/// E1 = 179.0
+/// E2 = 188.0
+/// E3 = 228.0                       # orthotropic only
+/// nu12 = 0.26
+/// nu13 = 0.30                      # orthotropic only
+/// nu23 = 0.31
+/// G12 = 57.1
+/// G13 = 65.8                       # orthotropic only
+/// G23 = 71.1                       # orthotropic only
+/// ```
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs, non_snake_case)]
+pub struct MaterialFile {
+    pub name: Option<String>,
+    pub symmetry: Symmetry,
+    pub units: Option<String>,
+    pub density: Option<f64>,
+    pub E1: Option<f64>,
+    pub E2: Option<f64>,
+    pub E3: Option<f64>,
+    pub nu12: Option<f64>,
+    pub nu13: Option<f64>,
+    pub nu23: Option<f64>,
+    pub G12: Option<f64>,
+    pub G13: Option<f64>,
+    pub G23: Option<f64>,
+}
+
+impl MaterialFile {
+    fn into_material(self, default_name: &str) -> Result<Material, MaterialError> {
+        let parse = |message: String| MaterialError::Parse { path: String::new(), message };
+        let scale = match self.units.as_deref().unwrap_or("Pa") {
+            "Pa" => 1.0,
+            "kPa" => 1e3,
+            "MPa" => 1e6,
+            other => return Err(parse(format!("units must be Pa, kPa or MPa, got {other:?}"))),
+        };
+        let need = |name: &str, v: Option<f64>| {
+            v.ok_or_else(|| parse(format!("missing constant {name} for a {:?} material", self.symmetry)))
+        };
+        let name = self.name.clone().unwrap_or_else(|| default_name.to_owned());
+        let density = self.density.unwrap_or(TISSUE_DENSITY);
+        match self.symmetry {
+            Symmetry::Orthotropic => {
+                let constants = EngineeringConstants {
+                    e1: need("E1", self.E1)? * scale,
+                    e2: need("E2", self.E2)? * scale,
+                    e3: need("E3", self.E3)? * scale,
+                    nu12: need("nu12", self.nu12)?,
+                    nu13: need("nu13", self.nu13)?,
+                    nu23: need("nu23", self.nu23)?,
+                    g12: need("G12", self.G12)? * scale,
+                    g13: need("G13", self.G13)? * scale,
+                    g23: need("G23", self.G23)? * scale,
+                };
+                Material::orthotropic(name, constants, density)
+            }
+            Symmetry::TransverselyIsotropic => {
+                for (key, v) in [("E3", self.E3), ("nu13", self.nu13), ("G13", self.G13), ("G23", self.G23)] {
+                    if v.is_some() {
+                        return Err(parse(format!(
+                            "{key} is derived for a transversely isotropic material \
+                             (E3 = E2, nu13 = nu12, G13 = G12, G23 = E2/(2(1+nu23))): remove it"
+                        )));
+                    }
+                }
+                Material::transversely_isotropic(
+                    name,
+                    need("E1", self.E1)? * scale,
+                    need("E2", self.E2)? * scale,
+                    need("nu12", self.nu12)?,
+                    need("nu23", self.nu23)?,
+                    need("G12", self.G12)? * scale,
+                    density,
+                )
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn round_trip(m: &Material) {
+        let i = m.compliance * m.stiffness;
+        let err = (i - Matrix6::identity()).abs().max();
+        assert!(err < 1e-13, "S C - I = {err}");
+        let c = &m.constants;
+        let pairs = [
+            (c.nu12 / c.e1, (c.nu12 * c.e2 / c.e1) / c.e2),
+            (m.compliance[(0, 2)], m.compliance[(2, 0)]),
+            (m.compliance[(1, 2)], m.compliance[(2, 1)]),
+        ];
+        for (a, b) in pairs {
+            assert!((a - b).abs() <= 1e-15 * a.abs().max(1e-30));
+        }
+        assert_eq!(m.stiffness, m.stiffness.transpose());
+    }
+
+    #[test]
+    fn presets_round_trip() {
+        round_trip(&Material::object_a());
+        round_trip(&Material::object_b());
+    }
+
+    #[test]
+    fn reciprocity_of_poisson_ratios() {
+        let m = Material::object_a();
+        let c = m.constants;
+        // nu_ji = -S[i][j] E_j: the spec's reciprocity nu_ij/E_i = nu_ji/E_j.
+        let nu21 = -m.compliance[(1, 0)] * c.e2;
+        assert!((c.nu12 / c.e1 - nu21 / c.e2).abs() < 1e-18);
+    }
+
+    #[test]
+    fn object_b_is_transversely_isotropic() {
+        let m = Material::object_b();
+        let c = m.stiffness;
+        assert!((c[(1, 1)] - c[(2, 2)]).abs() < 1e-9 * c[(1, 1)]);
+        assert!((c[(0, 1)] - c[(0, 2)]).abs() < 1e-9 * c[(0, 1)]);
+        // In-plane isotropy: C44 = (C22 - C23) / 2.
+        assert!((c[(3, 3)] - 0.5 * (c[(1, 1)] - c[(1, 2)])).abs() < 1e-9 * c[(3, 3)]);
+        assert!((m.constants.g23 - 115e3 / (2.0 * 1.58)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn rejects_bad_constants_by_name() {
+        let mut c = Material::object_a().constants;
+        c.e2 = -1.0;
+        let e = Material::orthotropic("x", c, 1040.0).unwrap_err().to_string();
+        assert!(e.contains("E2"), "{e}");
+        let mut c = Material::object_a().constants;
+        c.g13 = f64::NAN;
+        let e = Material::orthotropic("x", c, 1040.0).unwrap_err().to_string();
+        assert!(e.contains("G13") && e.contains("finite"), "{e}");
+        let mut c = Material::object_a().constants;
+        c.nu12 = 1.2;
+        let e = Material::orthotropic("x", c, 1040.0).unwrap_err().to_string();
+        assert!(e.contains("positive definite") && e.contains("nu12"), "{e}");
+        let mut c = Material::object_a().constants;
+        (c.nu12, c.nu13, c.nu23) = (0.7, 0.7, 0.7);
+        let e = Material::orthotropic("x", c, 1040.0).unwrap_err().to_string();
+        assert!(e.contains("positive definite"), "{e}");
+        let e = Material::orthotropic("x", Material::object_a().constants, 0.0).unwrap_err();
+        assert!(e.to_string().contains("density"));
+    }
+}

@@ -1,0 +1,13 @@
+//! The paper's mass-spring model (MSM) and its richer lattices.
+//!
+//! Nodes carry equal lumped masses; springs follow `f = k (|l| - l0)` along the spring; every node
+//! feels the damping force `-d v`. [`model`] holds the parameters and springs, [`forces`] the force
+//! and tangent kernels, [`statics`] the exact equilibrium, [`dynamics`] the time integrators.
+
+pub mod dynamics;
+pub mod forces;
+pub mod model;
+pub mod statics;
+
+pub use dynamics::Dynamics;
+pub use model::{MsmModel, MsmParams, ParamError, Topology};

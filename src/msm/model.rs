@@ -1,0 +1,194 @@
+//! The mass-spring model: parameters, spring families and masses.
+
+use crate::grid::{Grid, SpringFamily, axis_families, face_diagonal_families};
+
+/// Errors in MSM parameters.
+#[derive(Debug, thiserror::Error)]
+pub enum ParamError {
+    /// A parameter is NaN, infinite or out of its range.
+    #[error("MSM parameter {name} = {value} is invalid: {why}")]
+    Invalid {
+        /// Parameter name, e.g. `k1`.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// What is required.
+        why: &'static str,
+    },
+}
+
+/// Which springs the lattice has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Topology {
+    /// The paper's model: axis-aligned structural springs only (no shear stiffness).
+    Axis,
+    /// Axis springs plus both diagonals of every lattice square, one stiffness per plane.
+    Shear,
+}
+
+/// MSM parameters: spring stiffness per family (N/m) and nodal damping (N s/m).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MsmParams {
+    /// Stiffness of springs along axis 1 (x), N/m.
+    pub k1: f64,
+    /// Stiffness of springs along axis 2 (y), N/m.
+    pub k2: f64,
+    /// Stiffness of springs along axis 3 (z), N/m.
+    pub k3: f64,
+    /// Nodal damping: force `-d v` on every node, N s/m.
+    pub d: f64,
+    /// Face-diagonal stiffness in the 1-2 plane (shear topology), N/m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub c12: Option<f64>,
+    /// Face-diagonal stiffness in the 1-3 plane (shear topology), N/m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub c13: Option<f64>,
+    /// Face-diagonal stiffness in the 2-3 plane (shear topology), N/m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub c23: Option<f64>,
+}
+
+impl MsmParams {
+    /// The paper's axis-spring parameters.
+    pub fn axis(k1: f64, k2: f64, k3: f64, d: f64) -> Self {
+        Self { k1, k2, k3, d, c12: None, c13: None, c23: None }
+    }
+
+    /// The topology these parameters describe: shear when any diagonal stiffness is set.
+    pub fn topology(&self) -> Topology {
+        if self.c12.is_some() || self.c13.is_some() || self.c23.is_some() {
+            Topology::Shear
+        } else {
+            Topology::Axis
+        }
+    }
+
+    /// Checks ranges: axis stiffness positive, diagonal stiffness and damping non-negative, all finite.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let bad = |name, value, why| Err(ParamError::Invalid { name, value, why });
+        for (name, v) in [("k1", self.k1), ("k2", self.k2), ("k3", self.k3)] {
+            if !v.is_finite() || v <= 0.0 {
+                return bad(name, v, "a spring stiffness must be a positive finite number (N/m)");
+            }
+        }
+        if !self.d.is_finite() || self.d < 0.0 {
+            return bad("d", self.d, "damping must be a non-negative finite number (N s/m)");
+        }
+        for (name, v) in [("c12", self.c12), ("c13", self.c13), ("c23", self.c23)] {
+            if let Some(v) = v
+                && (!v.is_finite() || v < 0.0)
+            {
+                return bad(name, v, "a diagonal stiffness must be a non-negative finite number (N/m)");
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One spring family laid out for the force loop: pairs `(lo + p, lo + p + s)` for `p` in
+/// `0..stiffness.len()`, with `stiffness[p] = 0` where the lattice partner is outside the grid.
+#[derive(Debug, Clone)]
+pub struct FamilyLayout {
+    /// The lattice family.
+    pub family: SpringFamily,
+    /// Linear index offset between the two nodes of a pair.
+    pub offset: usize,
+    /// First node of the first pair.
+    pub lo: usize,
+    /// Stiffness of each pair (N/m), zero for pairs that are not springs.
+    pub stiffness: Vec<f64>,
+    /// Rest length, metres.
+    pub rest_length: f64,
+}
+
+/// A spring listed explicitly: nodes, stiffness (N/m), rest length (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spring {
+    /// First node.
+    pub a: usize,
+    /// Second node.
+    pub b: usize,
+    /// Stiffness, N/m.
+    pub k: f64,
+    /// Rest length, m.
+    pub rest: f64,
+}
+
+/// A mass-spring model of the cube: lattice springs, lumped masses, nodal damping.
+#[derive(Debug, Clone)]
+pub struct MsmModel {
+    /// The grid.
+    pub grid: Grid,
+    /// The parameters.
+    pub params: MsmParams,
+    /// Mass of every node, kg (the cube's mass shared equally).
+    pub node_mass: f64,
+    /// The spring families with non-zero stiffness.
+    pub families: Vec<FamilyLayout>,
+}
+
+impl MsmModel {
+    /// Builds the model; `density` in kg/m^3 gives the node mass `density L^3 / n^3`.
+    pub fn new(grid: Grid, params: MsmParams, density: f64) -> Result<Self, ParamError> {
+        params.validate()?;
+        let mut stiff: Vec<(SpringFamily, f64)> =
+            axis_families().into_iter().zip([params.k1, params.k2, params.k3]).collect();
+        let diag = face_diagonal_families();
+        for (plane, c) in [params.c12, params.c13, params.c23].into_iter().enumerate() {
+            if let Some(c) = c
+                && c > 0.0
+            {
+                stiff.extend(diag[plane].iter().map(|f| (*f, c)));
+            }
+        }
+        let families = stiff
+            .into_iter()
+            .map(|(family, k)| {
+                let (lo, _, valid) = grid.family_pairs(family);
+                FamilyLayout {
+                    family,
+                    offset: grid.linear_offset(family),
+                    lo,
+                    stiffness: valid.iter().map(|&v| if v { k } else { 0.0 }).collect(),
+                    rest_length: family.length_in_h() * grid.h(),
+                }
+            })
+            .collect();
+        let side = crate::grid::CUBE_SIDE_M;
+        let node_mass = density * side * side * side / grid.num_nodes() as f64;
+        Ok(Self { grid, params, node_mass, families })
+    }
+
+    /// All springs as an explicit list (for assembly of tangent matrices).
+    pub fn springs(&self) -> Vec<Spring> {
+        let mut out = Vec::new();
+        for f in &self.families {
+            for (p, &k) in f.stiffness.iter().enumerate() {
+                if k != 0.0 {
+                    out.push(Spring { a: f.lo + p, b: f.lo + p + f.offset, k, rest: f.rest_length });
+                }
+            }
+        }
+        out
+    }
+
+    /// Number of springs.
+    pub fn num_springs(&self) -> usize {
+        self.families.iter().map(|f| f.stiffness.iter().filter(|&&k| k != 0.0).count()).sum()
+    }
+
+    /// Elastic energy `sum 1/2 k (l - l0)^2` at positions `x` (structure of arrays).
+    pub fn elastic_energy(&self, x: &[Vec<f64>; 3]) -> f64 {
+        let mut e = 0.0;
+        for f in &self.families {
+            for (p, &k) in f.stiffness.iter().enumerate() {
+                let (i, j) = (f.lo + p, f.lo + p + f.offset);
+                let d = [x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]];
+                let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                e += 0.5 * k * (l - f.rest_length).powi(2);
+            }
+        }
+        e
+    }
+}
