@@ -1,7 +1,7 @@
 //! Time integration of the mass-spring model: symplectic (semi-implicit) Euler and linearised
 //! backward (implicit) Euler. Both steps allocate nothing once the state is built.
 
-use super::forces::{ForceScratch, TangentAssembler, add_spring_forces};
+use super::forces::{ForceScratch, TangentAssembler, add_spring_forces, dispatch_avx2, gather_forces, pair_forces};
 use super::model::MsmModel;
 use crate::cases::LoadCase;
 use crate::sparse::SparseError;
@@ -69,19 +69,9 @@ impl Dynamics {
         &self.f
     }
 
-    /// One symplectic Euler step: `v += dt/m (f(x) - d v)`, then `x += dt v`.
+    /// One symplectic Euler step: `v += dt/m (f(x) - d v)`, then `x += dt v`. Allocation-free.
     pub fn step_symplectic(&mut self, model: &MsmModel, dt: f64) {
-        self.forces(model);
-        let inv_m = 1.0 / model.node_mass;
-        let d = model.params.d;
-        for c in 0..3 {
-            let (x, v, f) = (&mut self.x[c], &mut self.v[c], &self.f[c]);
-            for (((x, v), f), free) in x.iter_mut().zip(v.iter_mut()).zip(f).zip(&self.free) {
-                let vn = (*v + dt * inv_m * (f - d * *v)) * free;
-                *v = vn;
-                *x += dt * vn;
-            }
-        }
+        symplectic_step(model, self, dt);
     }
 
     /// One linearised backward Euler step (Baraff-Witkin):
@@ -141,4 +131,25 @@ impl Dynamics {
             })
             .collect()
     }
+}
+
+#[inline(always)]
+fn symplectic_step_generic(model: &MsmModel, s: &mut Dynamics, dt: f64) {
+    pair_forces(model, &s.x, &mut s.scratch);
+    let h = dt / model.node_mass;
+    let d = model.params.d;
+    for c in 0..3 {
+        let f = &mut s.f[c];
+        gather_forces(model, &s.scratch, c, f, true);
+        let (x, v, fe) = (&mut s.x[c], &mut s.v[c], &s.f_ext[c]);
+        for ((((x, v), f), fe), free) in x.iter_mut().zip(v.iter_mut()).zip(f.iter()).zip(fe).zip(&s.free) {
+            let vn = (*v + h * (f + fe - d * *v)) * free;
+            *v = vn;
+            *x += dt * vn;
+        }
+    }
+}
+
+fn symplectic_step(model: &MsmModel, s: &mut Dynamics, dt: f64) {
+    dispatch_avx2!(symplectic_step_generic, symplectic_step_avx2, (model: &MsmModel, s: &mut Dynamics, dt: f64));
 }

@@ -10,52 +10,64 @@
 use super::model::MsmModel;
 use crate::sparse::{SparseError, SpdSystem};
 
-/// Preallocated per-pair buffers for [`add_spring_forces`].
+/// Preallocated per-family pair forces for the force kernels.
+///
+/// For a family with offset `s`, `t[c][s + p]` holds component `c` of the force on the first node
+/// of pair `p` (the pair `(p, p + s)`); the `s` leading and trailing entries stay zero, so that the
+/// net force of the family on node `q` is `t[s + q] - t[q]` for every node without a branch.
 #[derive(Debug, Clone)]
 pub struct ForceScratch {
-    t: [Vec<f64>; 3],
+    t: Vec<[Vec<f64>; 3]>,
 }
 
 impl ForceScratch {
-    /// Buffers large enough for every family of `model`.
+    /// Buffers for every family of `model`.
     pub fn new(model: &MsmModel) -> Self {
-        let len = model.families.iter().map(|f| f.stiffness.len()).max().unwrap_or(0);
-        Self { t: [vec![0.0; len], vec![0.0; len], vec![0.0; len]] }
+        let nn = model.grid.num_nodes();
+        let t = model
+            .families
+            .iter()
+            .map(|f| std::array::from_fn(|_| vec![0.0; nn + f.offset]))
+            .collect();
+        Self { t }
     }
 }
 
-/// Adds every spring force at positions `x` to `f` (both structure of arrays, one entry per node).
-pub fn add_spring_forces(model: &MsmModel, x: &[Vec<f64>; 3], f: &mut [Vec<f64>; 3], scratch: &mut ForceScratch) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
-            unsafe { add_spring_forces_avx2(model, x, f, scratch) };
-            return;
+/// Calls `$generic` through a copy of it compiled with AVX2 (4 doubles per instruction) when the
+/// CPU has it. No fused multiply-add is enabled, so both paths give identical bits.
+macro_rules! dispatch_avx2 {
+    ($generic:ident, $avx2:ident, ($($arg:ident : $ty:ty),*)) => {
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        unsafe fn $avx2($($arg: $ty),*) {
+            $generic($($arg),*)
         }
-    }
-    add_spring_forces_generic(model, x, f, scratch);
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2, checked just above.
+                unsafe { $avx2($($arg),*) };
+                return;
+            }
+        }
+        $generic($($arg),*);
+    };
 }
+pub(crate) use dispatch_avx2;
 
-/// The same loop compiled with AVX2 enabled (4 doubles per instruction). No fused multiply-add is
-/// used, so results are bit-identical to the generic build.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn add_spring_forces_avx2(model: &MsmModel, x: &[Vec<f64>; 3], f: &mut [Vec<f64>; 3], scratch: &mut ForceScratch) {
-    add_spring_forces_generic(model, x, f, scratch);
-}
-
+/// Computes every spring's force at positions `x` into `scratch`.
 #[inline(always)]
-fn add_spring_forces_generic(model: &MsmModel, x: &[Vec<f64>; 3], f: &mut [Vec<f64>; 3], scratch: &mut ForceScratch) {
-    let [tx, ty, tz] = &mut scratch.t;
-    for fam in &model.families {
+pub(crate) fn pair_forces(model: &MsmModel, x: &[Vec<f64>; 3], scratch: &mut ForceScratch) {
+    for (fam, t) in model.families.iter().zip(scratch.t.iter_mut()) {
         let len = fam.stiffness.len();
         let (lo, s, l0) = (fam.lo, fam.offset, fam.rest_length);
+        debug_assert_eq!(lo, 0);
         let k = &fam.stiffness[..len];
         let (xa, xb) = (&x[0][lo..lo + len], &x[0][lo + s..lo + s + len]);
         let (ya, yb) = (&x[1][lo..lo + len], &x[1][lo + s..lo + s + len]);
         let (za, zb) = (&x[2][lo..lo + len], &x[2][lo + s..lo + s + len]);
-        let (tx, ty, tz) = (&mut tx[..len], &mut ty[..len], &mut tz[..len]);
+        let [tx, ty, tz] = t;
+        let (tx, ty, tz) = (&mut tx[s..s + len], &mut ty[s..s + len], &mut tz[s..s + len]);
         for p in 0..len {
             let dx = xb[p] - xa[p];
             let dy = yb[p] - ya[p];
@@ -66,16 +78,40 @@ fn add_spring_forces_generic(model: &MsmModel, x: &[Vec<f64>; 3], f: &mut [Vec<f
             ty[p] = c * dy;
             tz[p] = c * dz;
         }
-        for (comp, t) in [&*tx, &*ty, &*tz].into_iter().enumerate() {
-            let fc = &mut f[comp];
-            for (fi, ti) in fc[lo..lo + len].iter_mut().zip(t) {
-                *fi += ti;
-            }
-            for (fj, ti) in fc[lo + s..lo + s + len].iter_mut().zip(t) {
-                *fj -= ti;
-            }
+    }
+}
+
+/// Component `c` of the net spring force: `f[q] (=|+=) sum over families of t[s + q] - t[q]`.
+#[inline(always)]
+pub(crate) fn gather_forces(model: &MsmModel, scratch: &ForceScratch, c: usize, f: &mut [f64], assign: bool) {
+    let nn = f.len();
+    if assign {
+        f.fill(0.0);
+    }
+    for (fam, t) in model.families.iter().zip(&scratch.t) {
+        let s = fam.offset;
+        let (ahead, behind) = (&t[c][s..s + nn], &t[c][..nn]);
+        for ((fq, a), b) in f.iter_mut().zip(ahead).zip(behind) {
+            *fq += a - b;
         }
     }
+}
+
+#[inline(always)]
+fn add_spring_forces_generic(model: &MsmModel, x: &[Vec<f64>; 3], f: &mut [Vec<f64>; 3], scratch: &mut ForceScratch) {
+    pair_forces(model, x, scratch);
+    for (c, fc) in f.iter_mut().enumerate() {
+        gather_forces(model, scratch, c, fc, false);
+    }
+}
+
+/// Adds every spring force at positions `x` to `f` (both structure of arrays, one entry per node).
+pub fn add_spring_forces(model: &MsmModel, x: &[Vec<f64>; 3], f: &mut [Vec<f64>; 3], scratch: &mut ForceScratch) {
+    dispatch_avx2!(
+        add_spring_forces_generic,
+        add_spring_forces_avx2,
+        (model: &MsmModel, x: &[Vec<f64>; 3], f: &mut [Vec<f64>; 3], scratch: &mut ForceScratch)
+    );
 }
 
 /// Tangent-stiffness assembly of a model into a sparse SPD system over the free degrees of freedom.

@@ -1,0 +1,54 @@
+//! The physics steps allocate nothing once built (a counting global allocator checks it).
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use tissue_sim::cases::LoadCase;
+use tissue_sim::grid::Grid;
+use tissue_sim::msm::{Dynamics, MsmModel, MsmParams};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator, only counting calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn explicit_and_implicit_steps_do_not_allocate() {
+    let grid = Grid::paper();
+    let params = MsmParams { c12: Some(200.0), c13: Some(200.0), c23: Some(200.0), ..MsmParams::axis(900.0, 1000.0, 1100.0, 0.5) };
+    let model = MsmModel::new(grid, params, 1040.0).expect("model");
+    let mut dynamics = Dynamics::new(&model);
+    dynamics.apply_case(&LoadCase::clamped(&grid, "A", 1, 5.0));
+    dynamics.step_symplectic(&model, 1e-5);
+    dynamics.step_implicit(&model, 1e-3).expect("first implicit step builds the pattern");
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    for _ in 0..100 {
+        dynamics.step_symplectic(&model, 1e-5);
+    }
+    let explicit = ALLOCATIONS.load(Ordering::Relaxed) - before;
+    for _ in 0..10 {
+        dynamics.step_implicit(&model, 1e-3).expect("implicit step");
+    }
+    let implicit = ALLOCATIONS.load(Ordering::Relaxed) - before - explicit;
+    assert_eq!((explicit, implicit), (0, 0), "allocations in 100 explicit / 10 implicit steps");
+}
