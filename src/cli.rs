@@ -7,12 +7,13 @@ use anyhow::{Context as _, bail};
 use clap::{Args, Parser, Subcommand};
 
 use crate::accuracy::{case_errors, cost, format_table};
+use crate::calibrate::{CostMode, GeneSpace, Method, Problem, Settings, calibrate};
 use crate::cases::{Bc, benchmark_cases};
 use crate::fem::FemModel;
 use crate::grid::Grid;
 use crate::io::{CaseRecord, DisplacementFile, read_json, write_json_atomic};
 use crate::material::Material;
-use crate::msm::{MsmModel, MsmParams, statics};
+use crate::msm::{MsmModel, MsmParams, Topology, statics};
 
 /// tissue-sim: anisotropic soft-tissue cube, FEM reference and calibrated mass-spring model.
 #[derive(Debug, Parser)]
@@ -66,6 +67,43 @@ pub enum Command {
         /// Print JSON instead of the table.
         #[arg(long)]
         json: bool,
+    },
+    /// Calibrate the MSM against the FEM reference with the paper's GA+SA (or pure GA / SA).
+    Calibrate {
+        #[command(flatten)]
+        object: ObjectArgs,
+        /// Search method.
+        #[arg(long, value_enum, default_value = "hybrid")]
+        method: Method,
+        /// Random seed (same seed and settings: same result).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Population size.
+        #[arg(long, default_value_t = 50)]
+        population: usize,
+        /// Generations (temperature steps for SA).
+        #[arg(long, default_value_t = 100)]
+        generations: usize,
+        /// Mutation probability per chromosome.
+        #[arg(long, default_value_t = 0.2)]
+        mutation: f64,
+        /// Crossover probability per selected pair.
+        #[arg(long, default_value_t = 0.8)]
+        crossover: f64,
+        /// Cost: static equilibria (the paper's).
+        #[arg(long, value_enum, default_value = "static")]
+        cost: CostMode,
+        /// MSM topology: the paper's axis springs, or axis + face-diagonal (shear) springs.
+        #[arg(long, value_enum, default_value = "axis")]
+        model: Topology,
+        /// Override a gene's search bounds, e.g. `--bound k1=100:5000` (repeatable).
+        #[arg(long = "bound", value_name = "GENE=LO:HI")]
+        bounds: Vec<String>,
+        #[command(flatten)]
+        grid: GridArgs,
+        /// Output JSON file (the spec's calibration result).
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Speed benchmark of the physics core (release build).
     Bench {
@@ -243,6 +281,52 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             };
             errors(&material, params, grid.grid()?, json)
         }
+        Some(Command::Calibrate {
+            object,
+            method,
+            seed,
+            population,
+            generations,
+            mutation,
+            crossover,
+            cost,
+            model,
+            bounds,
+            grid,
+            out,
+        }) => {
+            let material = object.material(None)?;
+            let grid = grid.grid()?;
+            let settings = Settings { method, seed, population, generations, mutation, crossover, cost, ..Settings::default() };
+            settings.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+            let mut space = GeneSpace::new(&material, &grid, model);
+            for b in &bounds {
+                let (name, range) = b.split_once('=').with_context(|| format!("--bound {b:?}: expected GENE=LO:HI"))?;
+                let (lo, hi) = range.split_once(':').with_context(|| format!("--bound {b:?}: expected GENE=LO:HI"))?;
+                let lo: f64 = lo.trim().parse().with_context(|| format!("--bound {b:?}: bad lower bound"))?;
+                let hi: f64 = hi.trim().parse().with_context(|| format!("--bound {b:?}: bad upper bound"))?;
+                space.set_bound(name.trim(), lo, hi).map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
+            }
+            let problem = Problem::new(material, grid, model)?;
+            let steps = generations as u64;
+            let bar = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+                let bar = indicatif::ProgressBar::new(steps);
+                bar.set_style(
+                    indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} generations, {msg} [{elapsed}]")
+                        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+                );
+                bar
+            } else {
+                indicatif::ProgressBar::hidden()
+            };
+            let cancel = std::sync::atomic::AtomicBool::new(false);
+            let result = calibrate(&problem, &space, &settings, &cancel, &mut |s| {
+                bar.set_position(s.generation as u64);
+                bar.set_message(format!("best cost {:.6e} m", s.best_cost));
+            })?;
+            bar.finish_and_clear();
+            write_json_atomic(&out, &result)
+        }
         Some(Command::Bench { json }) => {
             let report = crate::bench::run()?;
             if json {
@@ -282,7 +366,7 @@ fn errors(material: &Material, params: MsmParams, grid: Grid, json: bool) -> any
 fn overview() -> anyhow::Result<()> {
     println!(
         "tissue-sim: the interactive viewer is not part of this build yet.\n\
-         Headless commands: fem, msm, errors, bench (tissue-sim --help).\n\
+         Headless commands: fem, msm, errors, calibrate, bench (tissue-sim --help).\n\
          The paper's Table III parameters against this program's FEM reference:\n"
     );
     let grid = Grid::paper();

@@ -8,6 +8,7 @@
 
 pub mod accuracy;
 pub mod bench;
+pub mod calibrate;
 pub mod cases;
 pub mod cli;
 pub mod fem;

@@ -156,6 +156,16 @@ impl SpdSystem {
         self.l_values.len()
     }
 
+    /// Whether the current values are factorised.
+    pub fn is_factored(&self) -> bool {
+        self.factored
+    }
+
+    /// Forgets the factorisation (the next solve needs a new [`SpdSystem::factor`]).
+    pub fn invalidate(&mut self) {
+        self.factored = false;
+    }
+
     /// Sets every stored value to zero (and invalidates the factorisation).
     pub fn clear(&mut self) {
         self.values.fill(0.0);
@@ -206,6 +216,15 @@ impl SpdSystem {
             let s = col_ptr[c] as usize;
             debug_assert_eq!(row_idx[s] as usize, c);
             self.values[s] += v;
+        }
+        self.factored = false;
+    }
+
+    /// Adds `v * w[i]` to diagonal entry `i`.
+    pub fn add_diagonal_scaled(&mut self, v: f64, w: &[f64]) {
+        let col_ptr = self.pattern.col_ptr();
+        for (c, wc) in w.iter().enumerate().take(self.n) {
+            self.values[col_ptr[c] as usize] += v * wc;
         }
         self.factored = false;
     }

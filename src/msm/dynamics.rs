@@ -3,6 +3,7 @@
 
 use super::forces::{ForceScratch, TangentAssembler, add_spring_forces, dispatch_avx2, gather_forces, pair_forces};
 use super::model::MsmModel;
+use super::reduction::DofMap;
 use crate::cases::LoadCase;
 use crate::sparse::SparseError;
 
@@ -82,7 +83,7 @@ impl Dynamics {
     pub fn step_implicit(&mut self, model: &MsmModel, dt: f64) -> Result<(), SparseError> {
         if self.implicit.is_none() {
             let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
-            let tangent = TangentAssembler::new(model, &fixed)?;
+            let tangent = TangentAssembler::new(model, DofMap::free(&fixed))?;
             let rhs = vec![0.0; tangent.system.n()];
             let nn = self.free.len();
             self.implicit = Some(ImplicitWork { tangent, kv: std::array::from_fn(|_| vec![0.0; nn]), rhs });
@@ -94,12 +95,12 @@ impl Dynamics {
             kv.fill(0.0);
         }
         let diag = model.node_mass + dt * d;
-        work.tangent.assemble(&self.x, dt * dt, diag, true, Some((&self.v, &mut work.kv)));
+        work.tangent.assemble(model, &self.x, dt * dt, diag, true, Some((&self.v, &mut work.kv)));
         work.tangent.system.factor()?;
         for (p, &free) in self.free.iter().enumerate() {
             if free != 0.0 {
                 for c in 0..3 {
-                    let r = work.tangent.reduced[3 * p + c] as usize;
+                    let r = work.tangent.dofs.map[3 * p + c].0 as usize;
                     work.rhs[r] = dt * (self.f[c][p] - d * self.v[c][p] - dt * work.kv[c][p]);
                 }
             }
@@ -108,7 +109,7 @@ impl Dynamics {
         for (p, &free) in self.free.iter().enumerate() {
             if free != 0.0 {
                 for c in 0..3 {
-                    self.v[c][p] += work.rhs[work.tangent.reduced[3 * p + c] as usize];
+                    self.v[c][p] += work.rhs[work.tangent.dofs.map[3 * p + c].0 as usize];
                     self.x[c][p] += dt * self.v[c][p];
                 }
             }

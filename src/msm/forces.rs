@@ -7,7 +7,8 @@
 //! The force loop runs family by family over contiguous node ranges (structure of arrays), which
 //! the compiler vectorises; it allocates nothing.
 
-use super::model::MsmModel;
+use super::model::{MsmModel, Spring};
+use super::reduction::DofMap;
 use crate::sparse::{SparseError, SpdSystem};
 
 /// Preallocated per-family pair forces for the force kernels.
@@ -114,87 +115,115 @@ pub fn add_spring_forces(model: &MsmModel, x: &[Vec<f64>; 3], f: &mut [Vec<f64>;
     );
 }
 
-/// Tangent-stiffness assembly of a model into a sparse SPD system over the free degrees of freedom.
+/// Tangent-stiffness assembly of a model into a sparse SPD system over reduced unknowns
+/// (see [`DofMap`]): `P^T K_t P`.
 #[derive(Debug)]
 pub struct TangentAssembler {
-    /// The sparse system (free dofs only).
+    /// The sparse system over the reduced unknowns.
     pub system: SpdSystem,
-    /// Node dof -> reduced index, `u32::MAX` where fixed.
-    pub reduced: Vec<u32>,
-    /// For each spring `(a, b)`: slots of the lower (a,a) block (6), lower (b,b) block (6) and the
-    /// full (b,a) block (9), `u32::MAX` where a dof is fixed.
-    slots: Vec<[u32; 21]>,
-    springs: Vec<super::model::Spring>,
+    /// Node dofs -> reduced unknowns.
+    pub dofs: DofMap,
+    /// One spring per orbit under the map's reflections, with the orbit's size.
+    springs: Vec<(Spring, f64)>,
+    /// For each spring `(a, b)`: (slot, factor) of the lower (a,a) block (6), the lower (b,b)
+    /// block (6) and the full (b,a) block (9); slot `u32::MAX` where a dof is held. The factor is
+    /// `s_r s_c`, doubled where an off-diagonal entry folds onto a diagonal one.
+    slots: Vec<[(u32, f64); 21]>,
 }
 
 /// Lower-triangle index pairs of a 3 x 3 block.
 const LOWER: [(usize, usize); 6] = [(0, 0), (1, 0), (1, 1), (2, 0), (2, 1), (2, 2)];
 
+/// One representative per orbit of springs under the reflections of `dofs`, with the orbit size.
+/// Reflected springs belong to families of equal stiffness, so each contributes the same `P^T K P`.
+fn representative_springs(model: &MsmModel, dofs: &DofMap) -> Vec<(Spring, f64)> {
+    let springs = model.springs();
+    if dofs.mirrored_axes.is_empty() {
+        return springs.into_iter().map(|s| (s, 1.0)).collect();
+    }
+    let group = 1usize << dofs.mirrored_axes.len();
+    springs
+        .into_iter()
+        .filter_map(|sp| {
+            let mut keys: Vec<(usize, usize)> = (0..group)
+                .map(|g| {
+                    let (a, b) = (dofs.reflect_node(&model.grid, sp.a, g), dofs.reflect_node(&model.grid, sp.b, g));
+                    (a.min(b), a.max(b))
+                })
+                .collect();
+            let own = keys[0];
+            keys.sort_unstable();
+            keys.dedup();
+            (keys[0] == own).then_some((sp, keys.len() as f64))
+        })
+        .collect()
+}
+
 impl TangentAssembler {
-    /// Builds the pattern for `model` with the nodes marked in `fixed_node` held.
-    pub fn new(model: &MsmModel, fixed_node: &[bool]) -> Result<Self, SparseError> {
-        let mut reduced = vec![u32::MAX; 3 * fixed_node.len()];
-        let mut next = 0u32;
-        for (p, &fixed) in fixed_node.iter().enumerate() {
-            if !fixed {
-                for c in 0..3 {
-                    reduced[3 * p + c] = next;
-                    next += 1;
-                }
-            }
-        }
-        let springs = model.springs();
+    /// Builds the pattern of `P^T K P` for `model` over the reduced unknowns `dofs`. The pattern
+    /// serves every model of the same grid and topology: stiffness is read at assembly.
+    pub fn new(model: &MsmModel, dofs: DofMap) -> Result<Self, SparseError> {
+        let springs = representative_springs(model, &dofs);
         let mut entries = Vec::new();
-        let mut owners = Vec::new(); // (spring, local slot) for each entry
-        for (s, sp) in springs.iter().enumerate() {
+        let mut owners = Vec::new(); // (spring, local entry, factor)
+        for (s, (sp, _)) in springs.iter().enumerate() {
             let mut local = 0;
-            let mut push = |r: u32, c: u32, local: usize| {
-                if r != u32::MAX && c != u32::MAX {
-                    entries.push((r as usize, c as usize));
-                    owners.push((s, local));
+            let mut push = |r: usize, c: usize, local: usize| {
+                let ((ri, rs), (ci, cs)) = (dofs.map[r], dofs.map[c]);
+                if ri != u32::MAX && ci != u32::MAX {
+                    entries.push((ri as usize, ci as usize));
+                    let twice = if r != c && ri == ci { 2.0 } else { 1.0 };
+                    owners.push((s, local, rs * cs * twice));
                 }
             };
             for node in [sp.a, sp.b] {
                 for (r, c) in LOWER {
-                    push(reduced[3 * node + r], reduced[3 * node + c], local);
+                    push(3 * node + r, 3 * node + c, local);
                     local += 1;
                 }
             }
             for r in 0..3 {
                 for c in 0..3 {
-                    push(reduced[3 * sp.b + r], reduced[3 * sp.a + c], local);
+                    push(3 * sp.b + r, 3 * sp.a + c, local);
                     local += 1;
                 }
             }
         }
-        let (system, entry_slots) = SpdSystem::new(next as usize, &entries)?;
-        let mut slots = vec![[u32::MAX; 21]; springs.len()];
-        for ((s, local), slot) in owners.into_iter().zip(entry_slots) {
-            slots[s][local] = slot;
+        let (system, entry_slots) = SpdSystem::new(dofs.n, &entries)?;
+        let mut slots = vec![[(u32::MAX, 0.0); 21]; springs.len()];
+        for ((s, local, factor), slot) in owners.into_iter().zip(entry_slots) {
+            slots[s][local] = (slot, factor);
         }
-        Ok(Self { system, reduced, slots, springs })
+        Ok(Self { system, dofs, springs, slots })
     }
 
-    /// Assembles `diag I + scale K_t(x)` into the system (`K_t` the tangent stiffness). With
-    /// `clamp_geometric`, the geometric part `(1 - l0/l)` is clamped at zero so that the result is
-    /// positive semi-definite (the usual choice for implicit dynamics). When `kv` is given, also
-    /// accumulates `K_t v` (full dofs) into `kv.1`.
+    /// Assembles `diag D + scale P^T K_t(x) P` into the system, `D` the multiplicity of each
+    /// unknown (`P^T P`, so `diag` acts like `diag I` on node dofs). With `clamp_geometric`, each
+    /// spring's geometric part `(1 - l0/l)` is clamped at zero so that the result is positive
+    /// semi-definite (the usual choice for implicit dynamics). When `kv` is given (only without
+    /// mirror symmetry), also accumulates `K_t v` (node dofs) into `kv.1`.
     pub fn assemble(
         &mut self,
+        model: &MsmModel,
         x: &[Vec<f64>; 3],
         scale: f64,
         diag: f64,
         clamp_geometric: bool,
         mut kv: Option<(&[Vec<f64>; 3], &mut [Vec<f64>; 3])>,
     ) {
+        debug_assert!(kv.is_none() || self.dofs.mirrored_axes.is_empty());
         self.system.clear();
-        self.system.add_diagonal(diag);
-        for (sp, slots) in self.springs.iter().zip(&self.slots) {
+        if diag != 0.0 {
+            self.system.add_diagonal_scaled(diag, &self.dofs.multiplicity);
+        }
+        for ((sp, weight), slots) in self.springs.iter().zip(&self.slots) {
             let (a, b) = (sp.a, sp.b);
             let d = [x[0][b] - x[0][a], x[1][b] - x[1][a], x[2][b] - x[2][a]];
             let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(f64::MIN_POSITIVE);
             let n = d.map(|v| v / l);
-            let mut g = 1.0 - sp.rest / l;
+            let fam = &model.families[sp.family];
+            let k = fam.stiffness[a];
+            let mut g = 1.0 - fam.rest_length / l;
             if clamp_geometric {
                 g = g.max(0.0);
             }
@@ -202,23 +231,23 @@ impl TangentAssembler {
             for (r, row) in block.iter_mut().enumerate() {
                 for (c, v) in row.iter_mut().enumerate() {
                     let id = if r == c { 1.0 } else { 0.0 };
-                    *v = sp.k * (g * (id - n[r] * n[c]) + n[r] * n[c]);
+                    *v = k * (g * (id - n[r] * n[c]) + n[r] * n[c]);
                 }
             }
+            let w = scale * weight;
             for (i, (r, c)) in LOWER.iter().enumerate() {
-                let v = scale * block[*r][*c];
-                if slots[i] != u32::MAX {
-                    self.system.add(slots[i], v);
-                }
-                if slots[6 + i] != u32::MAX {
-                    self.system.add(slots[6 + i], v);
+                let v = w * block[*r][*c];
+                for (slot, f) in [slots[i], slots[6 + i]] {
+                    if slot != u32::MAX {
+                        self.system.add(slot, f * v);
+                    }
                 }
             }
             for r in 0..3 {
                 for c in 0..3 {
-                    let slot = slots[12 + 3 * r + c];
+                    let (slot, f) = slots[12 + 3 * r + c];
                     if slot != u32::MAX {
-                        self.system.add(slot, -scale * block[r][c]);
+                        self.system.add(slot, -f * w * block[r][c]);
                     }
                 }
             }

@@ -7,6 +7,7 @@
 pub mod dynamics;
 pub mod forces;
 pub mod model;
+pub mod reduction;
 pub mod statics;
 
 pub use dynamics::Dynamics;

@@ -98,6 +98,8 @@ pub struct FamilyLayout {
     pub lo: usize,
     /// Stiffness of each pair (N/m), zero for pairs that are not springs.
     pub stiffness: Vec<f64>,
+    /// Whether each pair is a spring (its lattice partner lies in the grid).
+    pub valid: Vec<bool>,
     /// Rest length, metres.
     pub rest_length: f64,
 }
@@ -105,10 +107,12 @@ pub struct FamilyLayout {
 /// A spring listed explicitly: nodes, stiffness (N/m), rest length (m).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Spring {
-    /// First node.
+    /// First node (also the pair index within its family).
     pub a: usize,
     /// Second node.
     pub b: usize,
+    /// Index of its family in [`MsmModel::families`].
+    pub family: usize,
     /// Stiffness, N/m.
     pub k: f64,
     /// Rest length, m.
@@ -136,9 +140,8 @@ impl MsmModel {
             axis_families().into_iter().zip([params.k1, params.k2, params.k3]).collect();
         let diag = face_diagonal_families();
         for (plane, c) in [params.c12, params.c13, params.c23].into_iter().enumerate() {
-            if let Some(c) = c
-                && c > 0.0
-            {
+            // Kept even at zero stiffness, so that the spring pattern depends on the topology only.
+            if let Some(c) = c {
                 stiff.extend(diag[plane].iter().map(|f| (*f, c)));
             }
         }
@@ -151,6 +154,7 @@ impl MsmModel {
                     offset: grid.linear_offset(family),
                     lo,
                     stiffness: valid.iter().map(|&v| if v { k } else { 0.0 }).collect(),
+                    valid,
                     rest_length: family.length_in_h() * grid.h(),
                 }
             })
@@ -163,10 +167,10 @@ impl MsmModel {
     /// All springs as an explicit list (for assembly of tangent matrices).
     pub fn springs(&self) -> Vec<Spring> {
         let mut out = Vec::new();
-        for f in &self.families {
+        for (family, f) in self.families.iter().enumerate() {
             for (p, &k) in f.stiffness.iter().enumerate() {
-                if k != 0.0 {
-                    out.push(Spring { a: f.lo + p, b: f.lo + p + f.offset, k, rest: f.rest_length });
+                if f.valid[p] {
+                    out.push(Spring { a: f.lo + p, b: f.lo + p + f.offset, family, k, rest: f.rest_length });
                 }
             }
         }
@@ -175,7 +179,7 @@ impl MsmModel {
 
     /// Number of springs.
     pub fn num_springs(&self) -> usize {
-        self.families.iter().map(|f| f.stiffness.iter().filter(|&&k| k != 0.0).count()).sum()
+        self.families.iter().map(|f| f.valid.iter().filter(|&&v| v).count()).sum()
     }
 
     /// Elastic energy `sum 1/2 k (l - l0)^2` at positions `x` (structure of arrays).

@@ -18,6 +18,7 @@
 
 use super::forces::{ForceScratch, TangentAssembler, add_spring_forces};
 use super::model::{MsmModel, Topology};
+use super::reduction::DofMap;
 use crate::cases::{Bc, LoadCase};
 use crate::fem::CaseSolution;
 use crate::sparse::SparseError;
@@ -47,11 +48,15 @@ pub struct NewtonOptions {
     pub rel_tol: f64,
     /// Iteration limit.
     pub max_iterations: usize,
+    /// Chord (modified Newton) iterations: keep the factorised tangent while the residual drops
+    /// at least fourfold per step, and start from the tangent already factorised in the
+    /// assembler if there is one (e.g. from the previous force of the same case family).
+    pub chord: bool,
 }
 
 impl Default for NewtonOptions {
     fn default() -> Self {
-        Self { rel_tol: 1e-10, max_iterations: 100 }
+        Self { rel_tol: 1e-10, max_iterations: 100, chord: false }
     }
 }
 
@@ -64,6 +69,8 @@ pub struct NewtonReport {
     pub rel_residual: f64,
     /// Largest Levenberg-Marquardt shift used, relative to the mean tangent diagonal (0: none).
     pub max_shift: f64,
+    /// Tangent factorisations done.
+    pub factorisations: usize,
 }
 
 /// The exact equilibrium of the axis-spring model under a clamped case, or `None` when the fast
@@ -93,14 +100,23 @@ pub fn equilibrium(model: &MsmModel, case: &LoadCase) -> Result<Vec<[f64; 3]>, S
     }
 }
 
-fn norm_free(v: &[Vec<f64>; 3], fixed: &[bool]) -> f64 {
+fn norm_free(v: &[Vec<f64>; 3], free: &[bool]) -> f64 {
     let mut s = 0.0;
-    for (p, &f) in fixed.iter().enumerate() {
-        if !f {
+    for (p, &f) in free.iter().enumerate() {
+        if f {
             s += v[0][p] * v[0][p] + v[1][p] * v[1][p] + v[2][p] * v[2][p];
         }
     }
     s.sqrt()
+}
+
+/// The reduced unknowns a case is solved in: the mirror-symmetric quarter for a clamped case,
+/// every free degree of freedom otherwise.
+pub fn case_dofs(grid: &crate::grid::Grid, case: &LoadCase) -> DofMap {
+    match case.bc {
+        Bc::Clamped => DofMap::clamped_symmetric(grid, case.axis - 1),
+        Bc::Patch => DofMap::free(&case.fixed_nodes()),
+    }
 }
 
 /// Newton-Raphson (with a Levenberg-Marquardt fallback) on the nonlinear spring equilibrium of a
@@ -110,26 +126,48 @@ pub fn solve_newton(
     case: &LoadCase,
     opts: NewtonOptions,
 ) -> Result<(Vec<[f64; 3]>, NewtonReport), StaticError> {
+    let mut tangent = TangentAssembler::new(model, case_dofs(&model.grid, case))?;
+    solve_newton_with(model, case, opts, &mut tangent, None)
+}
+
+/// [`solve_newton`] with a prepared tangent pattern (reused across parameter sets of one topology)
+/// and an optional starting displacement (a warm start; rest otherwise).
+pub fn solve_newton_with(
+    model: &MsmModel,
+    case: &LoadCase,
+    opts: NewtonOptions,
+    tangent: &mut TangentAssembler,
+    start: Option<&[[f64; 3]]>,
+) -> Result<(Vec<[f64; 3]>, NewtonReport), StaticError> {
     let grid = model.grid;
     let nn = grid.num_nodes();
-    let fixed = case.fixed_nodes();
+    let free: Vec<bool> = case.fixed_nodes().iter().map(|f| !f).collect();
     let rest: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|p| grid.position(p)[c]).collect());
     let f_ext: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|p| case.load[3 * p + c]).collect());
-    let f_norm = norm_free(&f_ext, &fixed);
+    let f_norm = norm_free(&f_ext, &free);
     let mut x = rest.clone();
-    let mut report = NewtonReport { iterations: 0, rel_residual: 0.0, max_shift: 0.0 };
-    if f_norm == 0.0 {
+    if let Some(u) = start {
+        for c in 0..3 {
+            for p in 0..nn {
+                if free[p] {
+                    x[c][p] += u[p][c];
+                }
+            }
+        }
+    }
+    let mut report = NewtonReport { iterations: 0, rel_residual: 0.0, max_shift: 0.0, factorisations: 0 };
+    if f_norm == 0.0 && start.is_none() {
         return Ok((vec![[0.0; 3]; nn], report));
     }
+    let f_norm = f_norm.max(f64::MIN_POSITIVE);
     let mut scratch = ForceScratch::new(model);
-    let mut tangent = TangentAssembler::new(model, &fixed)?;
     let residual = |x: &[Vec<f64>; 3], g: &mut [Vec<f64>; 3], scratch: &mut ForceScratch| {
         for c in 0..3 {
             g[c].copy_from_slice(&f_ext[c]);
         }
         add_spring_forces(model, x, g, scratch);
-        for (p, &f) in fixed.iter().enumerate() {
-            if f {
+        for (p, &f) in free.iter().enumerate() {
+            if !f {
                 for gc in g.iter_mut() {
                     gc[p] = 0.0;
                 }
@@ -148,12 +186,14 @@ pub fn solve_newton(
     };
     let mut g: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
     residual(&x, &mut g, &mut scratch);
-    let mut r_norm = norm_free(&g, &fixed);
-    let mut e = energy(&x);
+    let mut r_norm = norm_free(&g, &free);
+    let mut e: Option<f64> = None; // energy of x, computed when a step must be judged by it
     let mut lambda = 0.0f64; // shift relative to the mean diagonal of the tangent
-    let mut rhs = vec![0.0; tangent.system.n()];
+    let mean_diag = mean_diagonal(model);
+    let mut rhs = vec![0.0; tangent.dofs.n];
     let mut trial = x.clone();
     let mut g_trial = g.clone();
+    let mut refactor = !(opts.chord && tangent.system.is_factored());
     while r_norm > opts.rel_tol * f_norm {
         if report.iterations >= opts.max_iterations {
             return Err(StaticError::NotConverged {
@@ -163,46 +203,51 @@ pub fn solve_newton(
             });
         }
         report.iterations += 1;
-        tangent.assemble(&x, 1.0, 0.0, false, None);
-        let mean_diag = mean_diagonal(model);
-        if lambda > 0.0 {
-            tangent.system.add_diagonal(lambda * mean_diag);
-        }
-        if tangent.system.factor().is_err() {
-            lambda = if lambda == 0.0 { 1e-10 } else { lambda * 10.0 };
-            report.max_shift = report.max_shift.max(lambda);
-            continue;
-        }
-        for (p, &f) in fixed.iter().enumerate() {
-            if !f {
-                for c in 0..3 {
-                    rhs[tangent.reduced[3 * p + c] as usize] = g[c][p];
-                }
+        let fresh = refactor;
+        if refactor {
+            tangent.assemble(model, &x, 1.0, lambda * mean_diag, false, None);
+            if tangent.system.factor().is_err() {
+                lambda = if lambda == 0.0 { 1e-10 } else { lambda * 10.0 };
+                report.max_shift = report.max_shift.max(lambda);
+                continue;
             }
+            report.factorisations += 1;
+            refactor = !opts.chord;
         }
+        tangent.dofs.fold(&g, &mut rhs);
         tangent.system.solve_in_place(&mut rhs)?;
         for c in 0..3 {
             trial[c].copy_from_slice(&x[c]);
         }
-        for (p, &f) in fixed.iter().enumerate() {
-            if !f {
-                for c in 0..3 {
-                    trial[c][p] += rhs[tangent.reduced[3 * p + c] as usize];
-                }
-            }
-        }
+        tangent.dofs.expand_add(&rhs, &mut trial);
         residual(&trial, &mut g_trial, &mut scratch);
-        let r_trial = norm_free(&g_trial, &fixed);
-        let e_trial = energy(&trial);
-        if e_trial < e || r_trial < r_norm {
+        let r_trial = norm_free(&g_trial, &free);
+        // A step is accepted when it lowers the residual, or else the total potential energy.
+        let accept = r_trial < r_norm || {
+            let e_x = *e.get_or_insert_with(|| energy(&x));
+            let e_t = energy(&trial);
+            e_t < e_x && {
+                e = Some(e_t);
+                true
+            }
+        };
+        if accept {
+            if r_trial >= r_norm || (opts.chord && r_trial > 0.25 * r_norm) {
+                refactor = true; // a slow chord step: take a fresh tangent next time
+            }
+            if r_trial < r_norm {
+                e = None;
+            }
             std::mem::swap(&mut x, &mut trial);
             std::mem::swap(&mut g, &mut g_trial);
             r_norm = r_trial;
-            e = e_trial;
             lambda = if lambda <= 1e-10 { 0.0 } else { lambda / 10.0 };
         } else {
-            lambda = if lambda == 0.0 { 1e-10 } else { lambda * 10.0 };
-            report.max_shift = report.max_shift.max(lambda);
+            refactor = true;
+            if fresh {
+                lambda = if lambda == 0.0 { 1e-10 } else { lambda * 10.0 };
+                report.max_shift = report.max_shift.max(lambda);
+            }
         }
     }
     report.rel_residual = r_norm / f_norm;

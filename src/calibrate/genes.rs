@@ -1,0 +1,123 @@
+//! The chromosome: which MSM parameters are genes, and the search box they live in.
+//!
+//! Genes follow the paper: `(k1, k2, k3, d)` for an orthotropic object and `(k1, k2, d)` for a
+//! transversely isotropic one (`k3 = k2`); the shear model inserts one diagonal stiffness per plane
+//! before `d`: `c12, c13, c23` (orthotropic) or `c12, c23` (transversely isotropic, `c13 = c12`).
+//!
+//! Default bounds come from the material and the grid. A chain of springs along axis `a` under
+//! uniaxial stress `sigma` carries `sigma L^2 / n^2` and stretches `h sigma / E_a` per spring, so
+//! the stiffness that matches the material's uniaxial compliance is `k_a* = E_a L^2 / (n^2 h)`;
+//! likewise `c_ab* = G_ab L^2 / (n^2 h)` sets the scale of a diagonal family. The box is
+//! `[k*/2, 2 k*]` for axis springs and `[c*/100, 2 c*]` for diagonals (their best value can be
+//! far below the scale). A wider box costs the paper's budget (50 x 100) its convergence: see
+//! the bounds study in the `reproduce` report. For damping it is `[0, 10 d_c]`, with `d_c = 2 m omega_1` the critical
+//! damping of the slowest axial mode of a spring chain at `k*` (clamped at one end, `n - 1` moving
+//! masses: `omega_1 = 2 sqrt(k*/m) sin(pi / (2 (2n - 1)))`), taken over the three axes.
+
+use crate::grid::{CUBE_SIDE_M, Grid};
+use crate::material::Material;
+use crate::msm::{MsmParams, Topology};
+
+/// Names and bounds of the genes of one calibration.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GeneSpace {
+    /// Gene names, in chromosome order (`k1`, `k2`, [`k3`], [`c12`, [`c13`], `c23`], `d`).
+    pub names: Vec<String>,
+    /// Lower bounds.
+    pub lo: Vec<f64>,
+    /// Upper bounds.
+    pub hi: Vec<f64>,
+    /// Whether `k3` (and `c13`) are tied to `k2` (and `c12`).
+    pub transversely_isotropic: bool,
+}
+
+impl GeneSpace {
+    /// The default genes and bounds for `material` on `grid` (see the module docs).
+    pub fn new(material: &Material, grid: &Grid, topology: Topology) -> Self {
+        let ti = material.is_transversely_isotropic();
+        let c = &material.constants;
+        let n = grid.n() as f64;
+        let scale = CUBE_SIDE_M * CUBE_SIDE_M / (n * n * grid.h());
+        let k_star = [c.e1, c.e2, c.e3].map(|e| e * scale);
+        let c_star = [c.g12, c.g13, c.g23].map(|g| g * scale);
+        let mass = material.density * CUBE_SIDE_M.powi(3) / grid.num_nodes() as f64;
+        let d_crit = k_star
+            .iter()
+            .map(|k| {
+                let omega = 2.0 * (k / mass).sqrt() * (std::f64::consts::PI / (2.0 * (2.0 * n - 1.0))).sin();
+                2.0 * mass * omega
+            })
+            .fold(0.0, f64::max);
+        let mut names = Vec::new();
+        let mut lo = Vec::new();
+        let mut hi = Vec::new();
+        let mut push = |name: &str, l: f64, h: f64| {
+            names.push(name.to_owned());
+            lo.push(l);
+            hi.push(h);
+        };
+        let axes: &[usize] = if ti { &[0, 1] } else { &[0, 1, 2] };
+        for &a in axes {
+            push(["k1", "k2", "k3"][a], k_star[a] / 2.0, k_star[a] * 2.0);
+        }
+        if topology == Topology::Shear {
+            let planes: &[usize] = if ti { &[0, 2] } else { &[0, 1, 2] };
+            for &p in planes {
+                push(["c12", "c13", "c23"][p], c_star[p] / 100.0, c_star[p] * 2.0);
+            }
+        }
+        push("d", 0.0, 10.0 * d_crit);
+        Self { names, lo, hi, transversely_isotropic: ti }
+    }
+
+    /// Number of genes.
+    pub fn len(&self) -> usize {
+        self.names.len()
+    }
+
+    /// Always false: a chromosome has at least `k1`, `k2` and `d`.
+    pub fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+
+    /// Index of the damping gene (always last).
+    pub fn d_index(&self) -> usize {
+        self.names.len() - 1
+    }
+
+    /// Overrides the bounds of a gene by name; checks `0 <= lo < hi`, finite.
+    pub fn set_bound(&mut self, name: &str, lo: f64, hi: f64) -> Result<(), String> {
+        let i = self
+            .names
+            .iter()
+            .position(|n| n == name)
+            .ok_or_else(|| format!("no gene {name:?}; the genes are {}", self.names.join(", ")))?;
+        if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
+            return Err(format!("bounds of {name} must satisfy 0 <= lo < hi, got {lo}:{hi}"));
+        }
+        if name.starts_with('k') && lo <= 0.0 {
+            return Err(format!("the lower bound of {name} must be positive (an axis spring needs stiffness)"));
+        }
+        self.lo[i] = lo;
+        self.hi[i] = hi;
+        Ok(())
+    }
+
+    /// The MSM parameters a chromosome stands for.
+    pub fn params(&self, genes: &[f64]) -> MsmParams {
+        let get = |name: &str| self.names.iter().position(|n| n == name).map(|i| genes[i]);
+        let k2 = get("k2").unwrap_or(0.0);
+        let mut p = MsmParams::axis(
+            get("k1").unwrap_or(0.0),
+            k2,
+            get("k3").unwrap_or(k2),
+            get("d").unwrap_or(0.0),
+        );
+        if let Some(c12) = get("c12") {
+            p.c12 = Some(c12);
+            p.c13 = Some(get("c13").unwrap_or(c12));
+            p.c23 = get("c23");
+        }
+        p
+    }
+}
