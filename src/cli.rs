@@ -105,6 +105,18 @@ pub enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Regenerate the paper's Tables III-V and Figs. 5-6 (report.md, SVG plots, data) in DIR.
+    Reproduce {
+        /// Output directory (created if missing).
+        #[arg(long)]
+        out: PathBuf,
+        /// Seeds per method and object.
+        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..=1000))]
+        seeds: u64,
+        /// Skip the shear-spring model's calibration (about 25 s per object).
+        #[arg(long)]
+        no_shear: bool,
+    },
     /// Speed benchmark of the physics core (release build).
     Bench {
         /// Print JSON.
@@ -327,6 +339,11 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             bar.finish_and_clear();
             write_json_atomic(&out, &result)
         }
+        Some(Command::Reproduce { out, seeds, no_shear }) => {
+            crate::reproduce::run(&out, &crate::reproduce::Options { seeds, shear: !no_shear })?;
+            println!("wrote {}", out.join("report.md").display());
+            Ok(())
+        }
         Some(Command::Bench { json }) => {
             let report = crate::bench::run()?;
             if json {
@@ -366,7 +383,7 @@ fn errors(material: &Material, params: MsmParams, grid: Grid, json: bool) -> any
 fn overview() -> anyhow::Result<()> {
     println!(
         "tissue-sim: the interactive viewer is not part of this build yet.\n\
-         Headless commands: fem, msm, errors, calibrate, bench (tissue-sim --help).\n\
+         Headless commands: fem, msm, errors, calibrate, reproduce, bench (tissue-sim --help).\n\
          The paper's Table III parameters against this program's FEM reference:\n"
     );
     let grid = Grid::paper();

@@ -16,4 +16,5 @@ pub mod grid;
 pub mod io;
 pub mod material;
 pub mod msm;
+pub mod reproduce;
 pub mod sparse;

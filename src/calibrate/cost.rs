@@ -51,10 +51,12 @@ pub struct Problem {
     axial: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)>,
 }
 
-/// Per-thread buffers of the shear model's Newton solves: one tangent pattern per loaded axis.
+/// Per-thread buffers of the shear model's solves: one tangent pattern per loaded axis, for the
+/// static and for the transient cost.
 #[derive(Debug, Default)]
 pub struct Workspace {
     tangents: [Option<TangentAssembler>; 3],
+    transient: [Option<TangentAssembler>; 3],
 }
 
 impl Problem {
@@ -89,7 +91,41 @@ impl Problem {
         ua.iter().zip(perp).zip(idx).map(|((u, q), i)| ((u - i * s).powi(2) + q).sqrt()).sum()
     }
 
-    /// The paper's cost (eq. 1) of `params`, metres.
+    /// The cost of `params` in `mode`, metres.
+    pub fn cost_in(&self, mode: super::CostMode, params: &MsmParams, ws: &mut Workspace) -> Result<f64, CostError> {
+        match mode {
+            super::CostMode::Static => self.cost(params, ws),
+            super::CostMode::Transient => {
+                let solutions = self.transient_solutions(params, ws)?;
+                Ok(crate::accuracy::cost(&solutions, &self.fem))
+            }
+        }
+    }
+
+    /// MSM states [`super::transient::TRANSIENT_TIME_S`] after the step loads of the 9 cases.
+    pub fn transient_solutions(&self, params: &MsmParams, ws: &mut Workspace) -> Result<Vec<CaseSolution>, CostError> {
+        let model = self.model(params)?;
+        let mut out: Vec<CaseSolution> = Vec::with_capacity(self.cases.len());
+        for case in &self.cases {
+            let a = case.axis - 1;
+            let tangent = match &mut ws.transient[a] {
+                Some(t) => t,
+                slot => slot.insert(TangentAssembler::new(&model, case_dofs(&self.grid, case))?),
+            };
+            let prepared = out.last().is_some_and(|prev| prev.axis == case.axis);
+            let displacements = super::transient::transient_displacements(&model, case, tangent, prepared)?;
+            out.push(CaseSolution {
+                case_id: case.id.clone(),
+                axis: case.axis,
+                force_n: case.force_n,
+                displacements,
+                reaction_n: [0.0; 3],
+            });
+        }
+        Ok(out)
+    }
+
+    /// The paper's cost (eq. 1) of `params` with static equilibria, metres.
     pub fn cost(&self, params: &MsmParams, ws: &mut Workspace) -> Result<f64, CostError> {
         params.validate()?;
         if params.topology() == Topology::Axis {

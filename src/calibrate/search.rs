@@ -27,7 +27,7 @@ use rayon::prelude::*;
 
 use super::cost::{CostError, Problem, Workspace};
 use super::genes::GeneSpace;
-use super::{GenerationStats, Method, Settings};
+use super::{CostMode, GenerationStats, Method, Settings};
 
 /// What a search returns: the best genes, their cost, the per-generation history, evaluations.
 #[derive(Debug, Clone)]
@@ -47,16 +47,17 @@ pub struct SearchOutcome {
 struct Evaluator<'a> {
     problem: &'a Problem,
     space: &'a GeneSpace,
+    mode: CostMode,
     evaluations: u64,
 }
 
 impl Evaluator<'_> {
     fn eval_many(&mut self, genes: &[Vec<f64>]) -> Result<Vec<f64>, CostError> {
         self.evaluations += genes.len() as u64;
-        let (problem, space) = (self.problem, self.space);
+        let (problem, space, mode) = (self.problem, self.space, self.mode);
         genes
             .par_iter()
-            .map_init(Workspace::default, |ws, g| problem.cost(&space.params(g), ws))
+            .map_init(Workspace::default, |ws, g| problem.cost_in(mode, &space.params(g), ws))
             .collect()
     }
 }
@@ -119,7 +120,7 @@ pub fn genetic(
 ) -> Result<SearchOutcome, CostError> {
     let screen = settings.method == Method::Hybrid;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
-    let mut eval = Evaluator { problem, space, evaluations: 0 };
+    let mut eval = Evaluator { problem, space, mode: settings.cost, evaluations: 0 };
     let np = settings.population.max(2);
     let mut pop: Vec<Vec<f64>> = (0..np).map(|_| random_genes(&mut rng, space)).collect();
     let mut cost = eval.eval_many(&pop)?;
@@ -230,7 +231,7 @@ pub fn annealing(
     on_generation: &mut dyn FnMut(&GenerationStats),
 ) -> Result<SearchOutcome, CostError> {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
-    let mut eval = Evaluator { problem, space, evaluations: 0 };
+    let mut eval = Evaluator { problem, space, mode: settings.cost, evaluations: 0 };
     let mut x = random_genes(&mut rng, space);
     let mut fx = eval.eval_many(std::slice::from_ref(&x))?[0];
     let (mut best, mut best_cost) = (x.clone(), fx);
