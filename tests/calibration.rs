@@ -109,3 +109,27 @@ fn shear_model_calibration_beats_the_axis_optimum() {
     assert!(r.params.c12.is_some() && r.params.c23.is_some());
     assert!(r.cost < 0.9 * axis_optimum, "shear {} vs axis optimum {axis_optimum}", r.cost);
 }
+
+#[test]
+fn a_result_applies_to_a_running_model() {
+    use tissue_sim::cases::LoadCase;
+    use tissue_sim::msm::{Dynamics, MsmModel, MsmParams};
+    let (p, space) = problem(Material::object_a());
+    let r = run(&p, &space, &Settings { generations: 20, ..Settings::default() });
+    let grid = Grid::paper();
+    let before = MsmModel::new(grid, MsmParams::axis(900.0, 900.0, 900.0, r.params.d), 1040.0).expect("model");
+    let mut dynamics = Dynamics::new(&before);
+    dynamics.apply_case(&LoadCase::clamped(&grid, "A", 1, 5.0));
+    for _ in 0..100 {
+        dynamics.step_implicit(&before, 1e-3).expect("step");
+    }
+    let after = MsmModel::new(grid, r.params, 1040.0).expect("calibrated model");
+    dynamics.set_model(&after);
+    for _ in 0..3000 {
+        dynamics.step_implicit(&after, 1e-3).expect("step");
+    }
+    // Relaxes to the calibrated model's own equilibrium.
+    let tip = dynamics.displacements(&after)[grid.num_nodes() - 1][0];
+    let expect = 7.0 * 5.0 / 64.0 / r.params.k1;
+    assert!((tip - expect).abs() < 1e-6 * expect, "{tip} vs {expect}");
+}

@@ -61,6 +61,14 @@ impl Dynamics {
         self.implicit = None;
     }
 
+    /// Switches to another model on the same grid (new parameters, e.g. a calibration result, or
+    /// another topology), keeping positions, velocities, loads and fixed nodes.
+    pub fn set_model(&mut self, model: &MsmModel) {
+        debug_assert_eq!(model.grid.num_nodes(), self.free.len());
+        self.scratch = ForceScratch::new(model);
+        self.implicit = None;
+    }
+
     /// Total spring + external force on each node at the current positions (no damping).
     pub fn forces(&mut self, model: &MsmModel) -> &[Vec<f64>; 3] {
         for c in 0..3 {
