@@ -119,6 +119,21 @@ impl LoadCase {
     }
 }
 
+/// Parses a case id such as `A_clamped_ax1_F10` into its object label and case on `grid`.
+pub fn parse_case_id(grid: &Grid, id: &str) -> Result<(String, LoadCase), String> {
+    let bad = || format!("case id {id:?} is not of the form OBJECT_clamped|patch_axA_FF (e.g. A_clamped_ax1_F10)");
+    let parts: Vec<&str> = id.split('_').collect();
+    let [object, bc, axis, force] = parts[..] else { return Err(bad()) };
+    let axis: usize = axis.strip_prefix("ax").and_then(|a| a.parse().ok()).filter(|a| (1..=3).contains(a)).ok_or_else(bad)?;
+    let force: f64 = force.strip_prefix('F').and_then(|f| f.parse().ok()).filter(|f: &f64| f.is_finite() && *f >= 0.0).ok_or_else(bad)?;
+    let case = match bc {
+        "clamped" => LoadCase::clamped(grid, object, axis, force),
+        "patch" => LoadCase::patch(grid, object, axis, force),
+        _ => return Err(bad()),
+    };
+    Ok((object.to_owned(), case))
+}
+
 /// The 9 cases of one boundary-condition family, ordered axis 1..3, then force 1, 5, 10 N.
 pub fn benchmark_cases(grid: &Grid, object: &str, bc: Bc) -> Vec<LoadCase> {
     let mut out = Vec::with_capacity(9);

@@ -11,7 +11,7 @@ use crate::calibrate::{CostMode, GeneSpace, Method, Problem, Settings, calibrate
 use crate::cases::{Bc, benchmark_cases};
 use crate::fem::FemModel;
 use crate::grid::Grid;
-use crate::io::{CaseRecord, DisplacementFile, read_json, write_json_atomic};
+use crate::io::{CaseRecord, DisplacementFile, read_json, write_atomic, write_json_atomic};
 use crate::material::Material;
 use crate::msm::{MsmModel, MsmParams, Topology, statics};
 
@@ -19,7 +19,7 @@ use crate::msm::{MsmModel, MsmParams, Topology, statics};
 #[derive(Debug, Parser)]
 #[command(name = "tissue-sim", version, about, long_about = None)]
 pub struct Cli {
-    /// What to compute; without one, prints the paper's error tables for its own parameters.
+    /// What to compute; without one, opens the interactive viewer.
     #[command(subcommand)]
     pub command: Option<Command>,
 }
@@ -116,6 +116,40 @@ pub enum Command {
         /// Skip the shear-spring model's calibration (about 25 s per object).
         #[arg(long)]
         no_shear: bool,
+    },
+    /// Render the cube offscreen to a PNG through the viewer's renderer (any wgpu adapter,
+    /// software Vulkan included).
+    Render {
+        /// Output PNG file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Image width, pixels.
+        #[arg(long, default_value_t = 1280)]
+        width: u32,
+        /// Image height, pixels.
+        #[arg(long, default_value_t = 720)]
+        height: u32,
+        /// A benchmark case to show in static equilibrium, e.g. A_clamped_ax1_F10 (default: object A at rest).
+        #[arg(long)]
+        case: Option<String>,
+        /// Colour map: none, displacement magnitude, or MSM-vs-FEM error.
+        #[arg(long, value_enum, default_value = "displacement")]
+        colour: crate::scene::ColourMode,
+        /// MSM: the calibrated shear-spring tissue (default) or the paper's axis springs.
+        #[arg(long, value_enum, default_value = "shear")]
+        model: Topology,
+        /// Displacement magnification of the drawn shape.
+        #[arg(long, default_value_t = 1.0)]
+        magnify: f64,
+    },
+    /// The interactive viewer (the default), with options for smoke tests.
+    View {
+        /// Close after this many frames.
+        #[arg(long)]
+        frames: Option<u64>,
+        /// After closing, save the final 3D view (offscreen, 960x540) as PNG.
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
     },
     /// Speed benchmark of the physics core (release build).
     Bench {
@@ -244,7 +278,8 @@ pub fn main() -> ExitCode {
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        None => overview(),
+        None => crate::app::run(None, None),
+        Some(Command::View { frames, screenshot }) => crate::app::run(frames, screenshot),
         Some(Command::Fem { object, bc, grid, out }) => {
             let material = object.material(None)?;
             let grid = grid.grid()?;
@@ -344,6 +379,16 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             println!("wrote {}", out.join("report.md").display());
             Ok(())
         }
+        Some(Command::Render { out, width, height, case, colour, model, magnify }) => {
+            if !(magnify.is_finite() && magnify >= 0.0) {
+                bail!("--magnify must be a non-negative number, got {magnify}");
+            }
+            let scene = crate::scene::StaticScene::new(case.as_deref(), model, colour, magnify)?;
+            let png = scene.render_png(width, height)?;
+            write_atomic(&out, &png.bytes)?;
+            println!("wrote {} ({}x{}, adapter: {} / {:?})", out.display(), width, height, png.adapter, png.backend);
+            Ok(())
+        }
         Some(Command::Bench { json }) => {
             let report = crate::bench::run()?;
             if json {
@@ -377,19 +422,6 @@ fn errors(material: &Material, params: MsmParams, grid: Grid, json: bool) -> any
         print!("{}", format_table(&title, &errs));
     }
     Ok(())
-}
-
-/// Without a subcommand: the viewer is not built yet, so say so and show the paper's tables.
-fn overview() -> anyhow::Result<()> {
-    println!(
-        "tissue-sim: the interactive viewer is not part of this build yet.\n\
-         Headless commands: fem, msm, errors, calibrate, reproduce, bench (tissue-sim --help).\n\
-         The paper's Table III parameters against this program's FEM reference:\n"
-    );
-    let grid = Grid::paper();
-    errors(&Material::object_a(), MsmParams::axis(968.2, 1010.0, 1137.7, 795.3), grid, false)?;
-    println!();
-    errors(&Material::object_b(), MsmParams::axis(735.5, 679.9, 679.9, 537.2), grid, false)
 }
 
 /// Used by tests: the displacement file at `path`.

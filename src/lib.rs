@@ -7,6 +7,7 @@
 //! (`shared/spec/benchmark.md`); [`io`] writes its JSON files; [`cli`] is the command line.
 
 pub mod accuracy;
+pub mod app;
 pub mod bench;
 pub mod calibrate;
 pub mod cases;
@@ -16,5 +17,8 @@ pub mod grid;
 pub mod io;
 pub mod material;
 pub mod msm;
+pub mod render;
 pub mod reproduce;
+pub mod scene;
+pub mod sim;
 pub mod sparse;

@@ -1,0 +1,61 @@
+// The tissue cube's surface: Lambert + ambient shading, optional colour map of a per-vertex scalar.
+
+struct Globals {
+    view_proj: mat4x4<f32>,
+    // xyz: direction towards the light (world space).
+    light_dir: vec4<f32>,
+    // x: 1.0 = colour map on, y: opacity, zw: unused.
+    mode: vec4<f32>,
+    // Base colour when the colour map is off.
+    base_colour: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> globals: Globals;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) scalar: f32,
+};
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) scalar: f32,
+};
+
+@vertex
+fn vs_main(v: VertexIn) -> VertexOut {
+    var out: VertexOut;
+    out.clip = globals.view_proj * vec4<f32>(v.position, 1.0);
+    out.normal = v.normal;
+    out.scalar = v.scalar;
+    return out;
+}
+
+// A perceptually ordered blue -> cyan -> yellow -> red ramp for t in [0, 1].
+fn colour_map(t: f32) -> vec3<f32> {
+    let s = clamp(t, 0.0, 1.0);
+    let c0 = vec3<f32>(0.15, 0.20, 0.70);
+    let c1 = vec3<f32>(0.10, 0.75, 0.85);
+    let c2 = vec3<f32>(0.95, 0.90, 0.25);
+    let c3 = vec3<f32>(0.85, 0.15, 0.10);
+    if s < 0.3333 {
+        return mix(c0, c1, s * 3.0);
+    } else if s < 0.6667 {
+        return mix(c1, c2, (s - 0.3333) * 3.0);
+    }
+    return mix(c2, c3, (s - 0.6667) * 3.0);
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    let n = normalize(in.normal);
+    let diffuse = abs(dot(n, normalize(globals.light_dir.xyz)));
+    var base = globals.base_colour.rgb;
+    if globals.mode.x > 0.5 {
+        base = colour_map(in.scalar);
+    }
+    let shade = 0.3 + 0.7 * diffuse;
+    return vec4<f32>(base * shade, globals.mode.y);
+}

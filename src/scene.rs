@@ -1,0 +1,132 @@
+//! What the viewer and the headless commands show: the object, its calibrated tissue model, a
+//! load case in static equilibrium, and its colour map.
+
+use anyhow::Context as _;
+
+use crate::calibrate::{Problem, Workspace};
+use crate::cases::parse_case_id;
+use crate::grid::Grid;
+use crate::material::Material;
+use crate::msm::{MsmParams, Topology};
+use crate::render::camera::OrbitCamera;
+use crate::render::gpu::{LineVertex, SurfaceStyle};
+use crate::render::mesh::SurfaceMesh;
+use crate::render::offscreen::{Headless, encode_png};
+use crate::render::{fixed_outline, normalise};
+
+/// Per-node colour map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ColourMode {
+    /// Plain shading.
+    None,
+    /// Displacement magnitude.
+    Displacement,
+    /// Distance between the MSM and the FEM answer of the case.
+    Error,
+}
+
+/// The calibrated tissue parameters shipped in `assets/` (shear model) or the exact optimum of
+/// the paper's cost (axis model), for object `A` or `B`.
+pub fn tissue_params(material: &Material, topology: Topology) -> anyhow::Result<MsmParams> {
+    match topology {
+        Topology::Shear => {
+            let text = match material.name.as_str() {
+                "A" => include_str!("../assets/tissue_A_shear.json"),
+                "B" => include_str!("../assets/tissue_B_shear.json"),
+                other => anyhow::bail!("no calibrated shear tissue is shipped for object {other:?}; calibrate one"),
+            };
+            #[derive(serde::Deserialize)]
+            struct Shipped {
+                params: MsmParams,
+            }
+            let shipped: Shipped = serde_json::from_str(text).context("assets: invalid tissue file")?;
+            Ok(shipped.params)
+        }
+        Topology::Axis => {
+            let problem = Problem::new(material.clone(), Grid::paper(), Topology::Axis)?;
+            let (k, _) = problem.axis_optimum();
+            let model = problem.model(&MsmParams::axis(k[0], k[1], k[2], 0.0))?;
+            let (d, _) = crate::calibrate::damping::critical_damping(&model)?;
+            Ok(MsmParams::axis(k[0], k[1], k[2], d))
+        }
+    }
+}
+
+/// A case in static equilibrium, ready to draw.
+#[derive(Debug, Clone)]
+pub struct StaticScene {
+    /// The grid.
+    pub grid: Grid,
+    /// Drawn node positions (rest + magnified displacement), metres.
+    pub positions: Vec<[f32; 3]>,
+    /// Colour values in [0, 1], if a colour map is on.
+    pub scalar: Option<Vec<f32>>,
+    /// The value colour 1.0 stands for (metres).
+    pub scalar_max: f32,
+    /// Fixed nodes.
+    pub fixed: Vec<bool>,
+}
+
+/// A rendered image.
+#[derive(Debug, Clone)]
+pub struct RenderedPng {
+    /// PNG bytes.
+    pub bytes: Vec<u8>,
+    /// Adapter name.
+    pub adapter: String,
+    /// Backend.
+    pub backend: wgpu::Backend,
+}
+
+impl StaticScene {
+    /// Object A at rest (`case` `None`) or the static MSM answer of a case id.
+    pub fn new(case: Option<&str>, topology: Topology, colour: ColourMode, magnify: f64) -> anyhow::Result<Self> {
+        let grid = Grid::paper();
+        let rest = grid.positions();
+        let Some(id) = case else {
+            let positions = rest.iter().map(|p| p.map(|c| c as f32)).collect();
+            let scalar = (colour != ColourMode::None).then(|| vec![0.0; grid.num_nodes()]);
+            return Ok(Self { grid, positions, scalar, scalar_max: 0.0, fixed: vec![false; grid.num_nodes()] });
+        };
+        let (object, case) = parse_case_id(&grid, id).map_err(|e| anyhow::anyhow!(e))?;
+        let material = Material::preset(&object)
+            .with_context(|| format!("case {id}: unknown object {object:?} (the presets are A and B)"))?;
+        let params = tissue_params(&material, topology)?;
+        let problem = Problem::new(material, grid, topology)?;
+        let model = problem.model(&params)?;
+        let u = crate::msm::statics::equilibrium(&model, &case)?;
+        let positions = rest.iter().zip(&u).map(|(r, d)| std::array::from_fn(|c| (r[c] + magnify * d[c]) as f32)).collect();
+        let mut scalar_max = 0.0;
+        let scalar = match colour {
+            ColourMode::None => None,
+            ColourMode::Displacement => Some(u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() as f32).collect()),
+            ColourMode::Error => {
+                let fem = crate::fem::FemModel::new(grid, &problem.material).solve_cases(std::slice::from_ref(&case))?;
+                Some(u.iter().zip(&fem[0].displacements).map(|(a, b)| {
+                    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt() as f32
+                }).collect())
+            }
+        }
+        .map(|mut v: Vec<f32>| {
+            scalar_max = normalise(&mut v, None);
+            v
+        });
+        let _ = Workspace::default;
+        Ok(Self { grid, positions, scalar, scalar_max, fixed: case.fixed_nodes() })
+    }
+
+    /// Renders the scene offscreen with the default camera.
+    pub fn render_png(&self, width: u32, height: u32) -> anyhow::Result<RenderedPng> {
+        let headless = Headless::new()?;
+        let mut mesh = SurfaceMesh::new(&self.grid);
+        mesh.update(&self.positions, self.scalar.as_deref());
+        let mut lines: Vec<LineVertex> = Vec::new();
+        fixed_outline(&self.grid, &self.positions, &self.fixed, [0.2, 0.9, 0.3, 1.0], &mut lines);
+        let style = SurfaceStyle { colour_map: self.scalar.is_some(), ..SurfaceStyle::default() };
+        let view_proj = OrbitCamera::default().view_proj(width as f32 / height.max(1) as f32);
+        let rgba = headless.render((width, height), view_proj, style, &mesh, &lines)?;
+        let bytes = encode_png(width, height, &rgba)?;
+        Ok(RenderedPng { bytes, adapter: headless.adapter_info.name.clone(), backend: headless.adapter_info.backend })
+    }
+}

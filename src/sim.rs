@@ -1,0 +1,285 @@
+//! The interactive simulation: a mass-spring tissue stepped at a fixed time step, with the user's
+//! tools (a dragging spring, a spherical probe with real contact) and a blow-up guard. No GPU
+//! types and no threads: the viewer's physics thread and the headless `simulate` command both
+//! drive this.
+
+use crate::cases::LoadCase;
+use crate::msm::{Dynamics, MsmModel, MsmParams};
+
+/// Time integrator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Integrator {
+    /// Symplectic (semi-implicit) Euler: cheap, stable below a critical time step.
+    Symplectic,
+    /// Linearised backward Euler: stable for any time step, one sparse factorisation per step.
+    Implicit,
+}
+
+/// A user tool acting on the tissue.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tool {
+    /// Nothing held.
+    None,
+    /// A node pulled towards `target` (metres) by a stiff spring.
+    Drag {
+        /// The held node.
+        node: usize,
+        /// Where the mouse puts it, metres.
+        target: [f64; 3],
+    },
+    /// A rigid sphere; no node may be inside it.
+    Probe {
+        /// Centre, metres.
+        centre: [f64; 3],
+        /// Radius, metres.
+        radius: f64,
+    },
+}
+
+/// Stiffness of the dragging spring, N/m, and its damping, N s/m.
+pub const DRAG_STIFFNESS: f64 = 200.0;
+const DRAG_DAMPING: f64 = 0.5;
+
+/// What a blow-up looked like, and what to change.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlowUp {
+    /// Simulated time at detection, s.
+    pub time_s: f64,
+    /// What went wrong and what to change.
+    pub message: String,
+}
+
+/// The running tissue.
+#[derive(Debug)]
+pub struct Simulation {
+    /// The model.
+    pub model: MsmModel,
+    /// Its state.
+    pub dynamics: Dynamics,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Time step, s.
+    pub dt: f64,
+    /// The active tool.
+    pub tool: Tool,
+    /// Simulated time, s.
+    pub time_s: f64,
+    base_load: [Vec<f64>; 3],
+    /// Force of the tissue on the tool, newtons (last step).
+    pub tool_force: [f64; 3],
+    /// Last good state (positions, velocities, time), refreshed every 100 healthy steps.
+    good_x: [Vec<f64>; 3],
+    good_v: [Vec<f64>; 3],
+    good_time: Option<f64>,
+    steps_since_good: usize,
+    contact_forces: [Vec<f64>; 3],
+}
+
+impl Simulation {
+    /// The model at rest, one face clamped by `case` (if any) with its loads.
+    pub fn new(model: MsmModel, integrator: Integrator, dt: f64, case: Option<&LoadCase>) -> Self {
+        let mut dynamics = Dynamics::new(&model);
+        if let Some(c) = case {
+            dynamics.apply_case(c);
+        }
+        let base_load = dynamics.f_ext.clone();
+        let zeros = || std::array::from_fn(|_| vec![0.0; model.grid.num_nodes()]);
+        Self {
+            integrator,
+            dt,
+            tool: Tool::None,
+            time_s: 0.0,
+            base_load,
+            tool_force: [0.0; 3],
+            good_x: zeros(),
+            good_v: zeros(),
+            good_time: None,
+            steps_since_good: 0,
+            contact_forces: zeros(),
+            model,
+            dynamics,
+        }
+    }
+
+    /// Estimated critical time step of symplectic Euler, `2 / omega_max`, from Gershgorin's
+    /// bound `omega_max^2 <= max_i sum_j |K_ij| / m` on the rest stiffness (conservative).
+    pub fn explicit_dt_limit(model: &MsmModel) -> f64 {
+        let mut row = vec![0.0f64; model.grid.num_nodes()];
+        for s in model.springs() {
+            let k = model.families[s.family].stiffness[s.a];
+            let d = model.families[s.family].family.offset.map(|o| f64::from(o.abs()));
+            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            // Row sums of k d d^T (and its off-diagonal copy) for the worst component.
+            let w = (0..3).map(|c| d[c] / len * (d[0] + d[1] + d[2]) / len).fold(0.0, f64::max);
+            row[s.a] += 2.0 * k * w;
+            row[s.b] += 2.0 * k * w;
+        }
+        let lambda = row.iter().copied().fold(0.0, f64::max) / model.node_mass;
+        // Damping narrows the window: for v' = -(d/m) v the explicit limit is 2 m / d.
+        let damping_limit = if model.params.d > 0.0 { 2.0 * model.node_mass / model.params.d } else { f64::INFINITY };
+        (2.0 / lambda.sqrt()).min(damping_limit)
+    }
+
+    /// The integrator to use by default for `dt`: symplectic when `dt` is safely below its
+    /// limit, implicit otherwise.
+    pub fn default_integrator(model: &MsmModel, dt: f64) -> Integrator {
+        if dt <= 0.5 * Self::explicit_dt_limit(model) { Integrator::Symplectic } else { Integrator::Implicit }
+    }
+
+    /// Replaces the parameters, keeping the state (a calibration result applied live).
+    pub fn set_params(&mut self, params: MsmParams) -> Result<(), crate::msm::ParamError> {
+        let density = self.model.node_mass * self.model.grid.num_nodes() as f64 / crate::grid::CUBE_SIDE_M.powi(3);
+        self.model = MsmModel::new(self.model.grid, params, density)?;
+        self.dynamics.set_model(&self.model);
+        Ok(())
+    }
+
+    /// Applies a load case (fixed nodes and loads), keeping the state.
+    pub fn apply_case(&mut self, case: &LoadCase) {
+        self.dynamics.apply_case(case);
+        for c in 0..3 {
+            self.base_load[c].copy_from_slice(&self.dynamics.f_ext[c]);
+        }
+        self.good_time = None;
+    }
+
+    /// Back to rest (positions and velocities), keeping fixed nodes and loads.
+    pub fn reset(&mut self) {
+        let fresh = Dynamics::new(&self.model);
+        self.dynamics.x = fresh.x;
+        self.dynamics.v = fresh.v;
+        self.time_s = 0.0;
+        self.good_time = None;
+    }
+
+    /// Advances one step; on a blow-up restores the last good state and says why.
+    pub fn step(&mut self) -> Result<(), BlowUp> {
+        self.apply_tool_load();
+        let stepped = match self.integrator {
+            Integrator::Symplectic => {
+                self.dynamics.step_symplectic(&self.model, self.dt);
+                Ok(())
+            }
+            Integrator::Implicit => self.dynamics.step_implicit(&self.model, self.dt),
+        };
+        self.enforce_contact();
+        self.time_s += self.dt;
+        let healthy = stepped.is_ok() && self.healthy();
+        if healthy {
+            self.steps_since_good += 1;
+            if self.good_time.is_none() || self.steps_since_good >= 100 {
+                for c in 0..3 {
+                    self.good_x[c].copy_from_slice(&self.dynamics.x[c]);
+                    self.good_v[c].copy_from_slice(&self.dynamics.v[c]);
+                }
+                self.good_time = Some(self.time_s);
+                self.steps_since_good = 0;
+            }
+            return Ok(());
+        }
+        let limit = Self::explicit_dt_limit(&self.model);
+        let message = match (stepped, self.integrator) {
+            (Err(e), _) => format!("the implicit solve failed ({e}); the state was reset"),
+            (Ok(()), Integrator::Symplectic) if self.dt > limit => format!(
+                "diverged: symplectic Euler with dt = {:.3e} s is above its stability limit of about {limit:.3e} s \
+                 for this stiffness; the state was reset. Lower dt or choose the implicit integrator.",
+                self.dt
+            ),
+            (Ok(()), _) => "diverged (non-finite or runaway energy); the state was reset. Lower dt, soften the \
+                            tool, or choose the implicit integrator."
+                .to_owned(),
+        };
+        let time_s = self.time_s;
+        self.restore();
+        Err(BlowUp { time_s, message })
+    }
+
+    fn restore(&mut self) {
+        match self.good_time {
+            Some(t) => {
+                for c in 0..3 {
+                    self.dynamics.x[c].copy_from_slice(&self.good_x[c]);
+                    self.dynamics.v[c].copy_from_slice(&self.good_v[c]);
+                }
+                self.time_s = t;
+            }
+            None => self.reset(),
+        }
+        self.tool = Tool::None;
+        self.tool_force = [0.0; 3];
+    }
+
+    /// No NaN, nothing flung far away, no absurd kinetic energy.
+    fn healthy(&self) -> bool {
+        let l = crate::grid::CUBE_SIDE_M;
+        let finite = self.dynamics.x.iter().chain(&self.dynamics.v).all(|c| c.iter().all(|v| v.is_finite()));
+        finite
+            && self.dynamics.x.iter().all(|c| c.iter().all(|v| v.abs() < 20.0 * l))
+            && self.dynamics.kinetic_energy(&self.model) < 1e3
+    }
+
+    fn apply_tool_load(&mut self) {
+        for c in 0..3 {
+            self.dynamics.f_ext[c].copy_from_slice(&self.base_load[c]);
+        }
+        if let Tool::Drag { node, target } = self.tool {
+            let mut f = [0.0; 3];
+            for c in 0..3 {
+                f[c] = DRAG_STIFFNESS * (target[c] - self.dynamics.x[c][node]) - DRAG_DAMPING * self.dynamics.v[c][node];
+                self.dynamics.f_ext[c][node] += f[c];
+            }
+            self.tool_force = f.map(|v| -v);
+        }
+    }
+
+    /// Projects nodes out of the probe sphere, removes their inward velocity, and sums the
+    /// tissue's push on the probe (the inward part of each contact node's spring force).
+    fn enforce_contact(&mut self) {
+        let Tool::Probe { centre, radius } = self.tool else {
+            return;
+        };
+        let mut push = [0.0; 3];
+        let computed = self.dynamics.forces(&self.model);
+        for c in 0..3 {
+            self.contact_forces[c].copy_from_slice(&computed[c]);
+        }
+        let forces = &self.contact_forces;
+        let x = &mut self.dynamics.x;
+        let v = &mut self.dynamics.v;
+        for p in 0..x[0].len() {
+            if self.dynamics.free[p] == 0.0 {
+                continue;
+            }
+            let d = [x[0][p] - centre[0], x[1][p] - centre[1], x[2][p] - centre[2]];
+            let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            if dist >= radius {
+                continue;
+            }
+            let n = if dist > 1e-12 { d.map(|c| c / dist) } else { [0.0, 0.0, 1.0] };
+            for c in 0..3 {
+                x[c][p] = centre[c] + radius * n[c];
+            }
+            let vn = v[0][p] * n[0] + v[1][p] * n[1] + v[2][p] * n[2];
+            if vn < 0.0 {
+                for c in 0..3 {
+                    v[c][p] -= vn * n[c];
+                }
+            }
+            let fn_ = forces[0][p] * n[0] + forces[1][p] * n[1] + forces[2][p] * n[2];
+            if fn_ < 0.0 {
+                for c in 0..3 {
+                    push[c] += fn_ * n[c];
+                }
+            }
+        }
+        self.tool_force = push;
+    }
+
+    /// Node positions as f32 for drawing.
+    pub fn positions_f32(&self, out: &mut [[f32; 3]]) {
+        for (p, o) in out.iter_mut().enumerate() {
+            *o = [self.dynamics.x[0][p] as f32, self.dynamics.x[1][p] as f32, self.dynamics.x[2][p] as f32];
+        }
+    }
+}
