@@ -142,6 +142,16 @@ pub enum Command {
         #[arg(long, default_value_t = 1.0)]
         magnify: f64,
     },
+    /// Run a scripted sequence of tool actions (drag, probe, release, wait) without rendering;
+    /// write node positions and tool forces as JSON.
+    Simulate {
+        /// The script (JSON), see README.
+        #[arg(long)]
+        script: PathBuf,
+        /// Output JSON file.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// The interactive viewer (the default), with options for smoke tests.
     View {
         /// Close after this many frames.
@@ -280,6 +290,11 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         None => crate::app::run(None, None),
         Some(Command::View { frames, screenshot }) => crate::app::run(frames, screenshot),
+        Some(Command::Simulate { script, out }) => {
+            let s: crate::script::Script = read_json(&script)?;
+            let outcome = crate::script::run(&s).with_context(|| format!("in {}", script.display()))?;
+            write_json_atomic(&out, &outcome)
+        }
         Some(Command::Fem { object, bc, grid, out }) => {
             let material = object.material(None)?;
             let grid = grid.grid()?;

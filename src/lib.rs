@@ -20,5 +20,6 @@ pub mod msm;
 pub mod render;
 pub mod reproduce;
 pub mod scene;
+pub mod script;
 pub mod sim;
 pub mod sparse;
