@@ -31,5 +31,8 @@ fn vs_main(v: VertexIn) -> VertexOut {
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    if globals.mode.z > 0.5 {
+        return vec4<f32>(pow(in.colour.rgb, vec3<f32>(1.0 / 2.2)), in.colour.a);
+    }
     return in.colour;
 }

@@ -4,7 +4,7 @@ struct Globals {
     view_proj: mat4x4<f32>,
     // xyz: direction towards the light (world space).
     light_dir: vec4<f32>,
-    // x: 1.0 = colour map on, y: opacity, zw: unused.
+    // x: 1.0 = colour map on, y: opacity, z: 1.0 = encode to sRGB here (non-sRGB target), w: unused.
     mode: vec4<f32>,
     // Base colour when the colour map is off.
     base_colour: vec4<f32>,
@@ -57,5 +57,9 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         base = colour_map(in.scalar);
     }
     let shade = 0.3 + 0.7 * diffuse;
-    return vec4<f32>(base * shade, globals.mode.y);
+    var colour = base * shade;
+    if globals.mode.z > 0.5 {
+        colour = pow(colour, vec3<f32>(1.0 / 2.2));
+    }
+    return vec4<f32>(colour, globals.mode.y);
 }

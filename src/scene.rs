@@ -3,7 +3,7 @@
 
 use anyhow::Context as _;
 
-use crate::calibrate::{Problem, Workspace};
+use crate::calibrate::Problem;
 use crate::cases::parse_case_id;
 use crate::grid::Grid;
 use crate::material::Material;
@@ -26,31 +26,23 @@ pub enum ColourMode {
     Error,
 }
 
-/// The calibrated tissue parameters shipped in `assets/` (shear model) or the exact optimum of
-/// the paper's cost (axis model), for object `A` or `B`.
+/// The calibrated tissue parameters shipped in `assets/` for object `A` or `B`: the shear-spring
+/// model (the viewer's default) or the paper's axis-spring model, both calibrated by this program
+/// (hybrid GA+SA, seed 1, static cost; see each file's `note`).
 pub fn tissue_params(material: &Material, topology: Topology) -> anyhow::Result<MsmParams> {
-    match topology {
-        Topology::Shear => {
-            let text = match material.name.as_str() {
-                "A" => include_str!("../assets/tissue_A_shear.json"),
-                "B" => include_str!("../assets/tissue_B_shear.json"),
-                other => anyhow::bail!("no calibrated shear tissue is shipped for object {other:?}; calibrate one"),
-            };
-            #[derive(serde::Deserialize)]
-            struct Shipped {
-                params: MsmParams,
-            }
-            let shipped: Shipped = serde_json::from_str(text).context("assets: invalid tissue file")?;
-            Ok(shipped.params)
-        }
-        Topology::Axis => {
-            let problem = Problem::new(material.clone(), Grid::paper(), Topology::Axis)?;
-            let (k, _) = problem.axis_optimum();
-            let model = problem.model(&MsmParams::axis(k[0], k[1], k[2], 0.0))?;
-            let (d, _) = crate::calibrate::damping::critical_damping(&model)?;
-            Ok(MsmParams::axis(k[0], k[1], k[2], d))
-        }
+    let text = match (material.name.as_str(), topology) {
+        ("A", Topology::Shear) => include_str!("../assets/tissue_A_shear.json"),
+        ("B", Topology::Shear) => include_str!("../assets/tissue_B_shear.json"),
+        ("A", Topology::Axis) => include_str!("../assets/tissue_A_axis.json"),
+        ("B", Topology::Axis) => include_str!("../assets/tissue_B_axis.json"),
+        (other, _) => anyhow::bail!("no calibrated tissue is shipped for object {other:?}; calibrate one"),
+    };
+    #[derive(serde::Deserialize)]
+    struct Shipped {
+        params: MsmParams,
     }
+    let shipped: Shipped = serde_json::from_str(text).context("assets: invalid tissue file")?;
+    Ok(shipped.params)
 }
 
 /// A case in static equilibrium, ready to draw.
@@ -112,7 +104,6 @@ impl StaticScene {
             scalar_max = normalise(&mut v, None);
             v
         });
-        let _ = Workspace::default;
         Ok(Self { grid, positions, scalar, scalar_max, fixed: case.fixed_nodes() })
     }
 

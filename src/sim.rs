@@ -38,8 +38,8 @@ pub enum Tool {
 }
 
 /// Stiffness of the dragging spring, N/m, and its damping, N s/m.
-pub const DRAG_STIFFNESS: f64 = 200.0;
-const DRAG_DAMPING: f64 = 0.5;
+pub const DRAG_STIFFNESS: f64 = 1000.0;
+const DRAG_DAMPING: f64 = 1.0;
 
 /// What a blow-up looked like, and what to change.
 #[derive(Debug, Clone, PartialEq)]

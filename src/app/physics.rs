@@ -54,6 +54,8 @@ pub struct Published {
     pub message: Option<String>,
     /// Integrator and dt in use.
     pub integrator: Option<(Integrator, f64)>,
+    /// How many tool commands have been applied (to measure input-to-photon latency).
+    pub tool_commands: u64,
 }
 
 /// Handle to the running physics thread; stops and joins it on drop.
@@ -92,6 +94,7 @@ impl PhysicsThread {
             into.tool_force = p.tool_force;
             into.message.clone_from(&p.message);
             into.integrator = p.integrator;
+            into.tool_commands = p.tool_commands;
         }
     }
 }
@@ -105,7 +108,7 @@ impl Drop for PhysicsThread {
     }
 }
 
-fn publish(sim: &Simulation, out: &Mutex<Published>, stats: (f64, f64, f64, f64), message: &Option<String>) {
+fn publish(sim: &Simulation, out: &Mutex<Published>, stats: (f64, f64, f64, f64), message: &Option<String>, tools: u64) {
     if let Ok(mut p) = out.lock() {
         let n = sim.model.grid.num_nodes();
         p.positions.resize(n, [0.0; 3]);
@@ -121,6 +124,7 @@ fn publish(sim: &Simulation, out: &Mutex<Published>, stats: (f64, f64, f64, f64)
             p.message.clone_from(message);
         }
         p.integrator = Some((sim.integrator, sim.dt));
+        p.tool_commands = tools;
     }
 }
 
@@ -133,6 +137,7 @@ fn run(mut sim: Simulation, rx: &Receiver<Option<Command>>, out: &Mutex<Publishe
     let mut stats = (0.0, 0.0, 0.0, 0.0);
     // Simulated time owed to the wall clock.
     let mut owed = 0.0f64;
+    let mut tools = 0u64;
     loop {
         while let Ok(cmd) = rx.try_recv() {
             let Some(cmd) = cmd else { return };
@@ -146,7 +151,10 @@ fn run(mut sim: Simulation, rx: &Receiver<Option<Command>>, out: &Mutex<Publishe
                     sim.integrator = i;
                     sim.dt = dt;
                 }
-                Command::SetTool(t) => sim.tool = t,
+                Command::SetTool(t) => {
+                    sim.tool = t;
+                    tools += 1;
+                }
                 Command::ApplyCase(Some(c)) => sim.apply_case(&c),
                 Command::ApplyCase(None) => {
                     let free = LoadCase {
@@ -196,7 +204,7 @@ fn run(mut sim: Simulation, rx: &Receiver<Option<Command>>, out: &Mutex<Publishe
             );
             (window_start, ticks, steps, busy, sim_at_window) = (Instant::now(), 0, 0, Duration::ZERO, sim.time_s);
         }
-        publish(&sim, out, stats, &message);
+        publish(&sim, out, stats, &message, tools);
         next += TICK;
         let now = Instant::now();
         if next > now {

@@ -46,6 +46,7 @@ struct Ui {
     probe_radius_mm: f64,
     colour: ColourMode,
     show_springs: bool,
+    show_nodes: bool,
     show_fixed: bool,
     case_axis: usize,
     case_force: f64,
@@ -104,6 +105,12 @@ struct App {
     fps: f64,
     frame_clock: (Instant, u64),
     error: Option<anyhow::Error>,
+    /// Tool commands sent, and when each still unseen on screen was sent.
+    tools_sent: u64,
+    pending: std::collections::VecDeque<(u64, Instant)>,
+    /// Input-to-photon latency of tool commands: (sum s, count, max s) since the last report.
+    latency: (f64, u64, f64),
+    latency_shown: (f64, f64),
 }
 
 fn build_sim(material: &Material, topology: Topology, params: MsmParams, integrator: Integrator, dt: f64, case: Option<&LoadCase>) -> anyhow::Result<Simulation> {
@@ -145,9 +152,10 @@ impl App {
                 integrator,
                 dt,
                 tool: ToolKind::Drag,
-                probe_radius_mm: 10.0,
+                probe_radius_mm: 15.0,
                 colour: ColourMode::Displacement,
                 show_springs: false,
+                show_nodes: false,
                 show_fixed: true,
                 case_axis: 1,
                 case_force: 10.0,
@@ -168,7 +176,7 @@ impl App {
             gesture: Gesture::None,
             mesh: SurfaceMesh::new(&grid),
             grid,
-            lines: Vec::with_capacity(2 * 4000),
+            lines: Vec::with_capacity(2 * 6000),
             scalar: vec![0.0; grid.num_nodes()],
             rest,
             view_rect: egui::Rect::NOTHING,
@@ -178,6 +186,10 @@ impl App {
             fps: 0.0,
             frame_clock: (Instant::now(), 0),
             error: None,
+            tools_sent: 0,
+            pending: std::collections::VecDeque::new(),
+            latency: (0.0, 0, 0.0),
+            latency_shown: (0.0, 0.0),
         })
     }
 
@@ -203,8 +215,20 @@ impl App {
         }))
         .context("cannot create a GPU device")?;
         let caps = surface.get_capabilities(&adapter);
-        let format = caps.formats.iter().copied().find(wgpu::TextureFormat::is_srgb).unwrap_or(caps.formats[0]);
-        let present_mode = if caps.present_modes.contains(&wgpu::PresentMode::Mailbox) {
+        // On a software adapter a non-sRGB target spares egui a per-pixel gamma conversion (its
+        // largest cost there); the cube's shader then encodes sRGB itself.
+        let software = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| f.is_srgb() != software)
+            .unwrap_or(caps.formats[0]);
+        // Mailbox where offered; on a software adapter (no real display to tear) Immediate, which
+        // lets a CPU rasteriser run as fast as it can; Fifo otherwise.
+        let present_mode = if software && caps.present_modes.contains(&wgpu::PresentMode::Immediate) {
+            wgpu::PresentMode::Immediate
+        } else if caps.present_modes.contains(&wgpu::PresentMode::Mailbox) {
             wgpu::PresentMode::Mailbox
         } else {
             wgpu::PresentMode::Fifo
@@ -223,8 +247,10 @@ impl App {
         };
         surface.configure(&device, &config);
         let depth = depth_view(&device, config.width, config.height);
-        let cube = CubeRenderer::new(&device, format, &self.mesh, 2 * 4000);
-        let egui_renderer = egui_wgpu::Renderer::new(&device, format, egui_wgpu::RendererOptions::default());
+        let cube = CubeRenderer::new(&device, format, &self.mesh, self.lines.capacity());
+        // Dithering is a per-pixel cost a software rasteriser feels; it only hides banding.
+        let options = egui_wgpu::RendererOptions { dithering: !software, ..Default::default() };
+        let egui_renderer = egui_wgpu::Renderer::new(&device, format, options);
         let egui_state = egui_winit::State::new(
             self.egui.clone(),
             egui::ViewportId::ROOT,
@@ -244,6 +270,15 @@ impl App {
             g.config.height = height.max(1);
             g.surface.configure(&g.device, &g.config);
             g.depth = depth_view(&g.device, g.config.width, g.config.height);
+        }
+    }
+
+    /// Sends a tool command and remembers when, to time it to the screen.
+    fn send_tool(&mut self, t: Tool) {
+        self.physics.send(Command::SetTool(t));
+        self.tools_sent += 1;
+        if self.pending.len() < 256 {
+            self.pending.push_back((self.tools_sent, Instant::now()));
         }
     }
 
@@ -294,7 +329,7 @@ impl App {
     fn apply_case(&mut self) {
         let case = LoadCase::clamped(&self.grid, &self.ui.material.name, self.ui.case_axis, self.ui.case_force);
         self.ui.case_active = Some(case.clone());
-        self.physics.send(Command::SetTool(Tool::None));
+        self.send_tool(Tool::None);
         self.physics.send(Command::Reset);
         self.physics.send(Command::ApplyCase(Some(case.clone())));
         // The FEM answer, solved off the UI thread.
@@ -322,6 +357,13 @@ impl App {
             "{:.0} fps | physics {:.0} ticks/s ({:.0} steps/s, {:.1} us/step, x{:.2} real time)",
             self.fps, self.latest.ticks_per_s, self.latest.steps_per_s, self.latest.step_us, self.latest.realtime
         ));
+        if self.latency_shown.0 > 0.0 {
+            ui.label(format!(
+                "tool input to screen: mean {:.0} ms, max {:.0} ms",
+                self.latency_shown.0 * 1e3,
+                self.latency_shown.1 * 1e3
+            ));
+        }
         if let Some(m) = &self.latest.message {
             ui.colored_label(egui::Color32::from_rgb(255, 120, 90), m);
         }
@@ -413,6 +455,15 @@ impl App {
                     self.ui.integrator = Simulation::default_integrator(&model, self.ui.dt);
                     changed = true;
                 }
+                // Never leave the explicit integrator running where it would be unstable.
+                if changed && self.ui.integrator == Integrator::Symplectic && self.ui.dt > 0.9 * limit {
+                    self.ui.integrator = Integrator::Implicit;
+                    self.ui.note = Some(format!(
+                        "dt = {:.3} ms is above 0.9 x the explicit limit ({:.3} ms): switched to implicit Euler",
+                        self.ui.dt * 1e3,
+                        limit * 1e3
+                    ));
+                }
             }
             if changed {
                 self.physics.send(Command::SetIntegrator(self.ui.integrator, self.ui.dt));
@@ -479,6 +530,7 @@ impl App {
                 ui.selectable_value(&mut self.ui.colour, ColourMode::Error, "error vs FEM");
             });
             ui.checkbox(&mut self.ui.show_springs, "springs");
+            ui.checkbox(&mut self.ui.show_nodes, "nodes");
             ui.checkbox(&mut self.ui.show_fixed, "fixed nodes");
             if ui.button("Reset camera").clicked() {
                 self.camera = OrbitCamera::default();
@@ -611,13 +663,12 @@ impl App {
         if response.drag_started_by(egui::PointerButton::Primary) && self.ui.tool != ToolKind::Orbit {
             if let Some(pos) = response.interact_pointer_pos() {
                 let (o, d) = self.camera.ray(ndc(pos), aspect);
-                if let Some(node) = pick_node(&self.latest.positions, o, d, 0.006) {
-                    let p = Vec3::from(self.latest.positions[node]);
+                if let Some((hit, node)) = self.mesh.pick(o.to_array(), d.to_array()) {
                     self.gesture = match self.ui.tool {
-                        ToolKind::Drag => Gesture::Drag { node, plane_point: p },
+                        ToolKind::Drag => Gesture::Drag { node, plane_point: Vec3::from(self.latest.positions[node]) },
                         ToolKind::Probe => {
                             self.ui.force_depth.clear();
-                            Gesture::Probe { contact: p, dir: d, start_y: pos.y }
+                            Gesture::Probe { contact: Vec3::from(hit), dir: d, start_y: pos.y }
                         }
                         ToolKind::Orbit => Gesture::None,
                     };
@@ -635,7 +686,7 @@ impl App {
                     if denom.abs() > 1e-6 {
                         let t = (plane_point - o).dot(n) / denom;
                         let target = o + t * d;
-                        self.physics.send(Command::SetTool(Tool::Drag { node, target: target.as_dvec3().to_array() }));
+                        self.send_tool(Tool::Drag { node, target: target.as_dvec3().to_array() });
                     }
                 }
                 Gesture::Probe { contact, dir, start_y } => {
@@ -643,7 +694,7 @@ impl App {
                     // 0.1 mm of indentation per pixel dragged downwards.
                     let depth = ((pos.y - start_y) * 1e-4).max(0.0);
                     let centre = contact - r * dir + depth * dir;
-                    self.physics.send(Command::SetTool(Tool::Probe { centre: centre.as_dvec3().to_array(), radius: f64::from(r) }));
+                    self.send_tool(Tool::Probe { centre: centre.as_dvec3().to_array(), radius: f64::from(r) });
                     let f = self.latest.tool_force;
                     let along = -(f[0] * f64::from(dir.x) + f[1] * f64::from(dir.y) + f[2] * f64::from(dir.z));
                     if self.ui.force_depth.last().is_none_or(|l| (l[0] - f64::from(depth) * 1e3).abs() > 0.05) {
@@ -655,7 +706,7 @@ impl App {
         }
         if response.drag_stopped() {
             if matches!(self.gesture, Gesture::Drag { .. } | Gesture::Probe { .. }) {
-                self.physics.send(Command::SetTool(Tool::None));
+                self.send_tool(Tool::None);
             }
             self.gesture = Gesture::None;
         }
@@ -693,6 +744,20 @@ impl App {
         if self.ui.show_fixed {
             fixed_outline(&self.grid, pos, &self.latest.fixed, [0.2, 0.9, 0.3, 1.0], &mut self.lines);
         }
+        if self.ui.show_nodes {
+            for p in pos {
+                for axis in 0..3 {
+                    if self.lines.len() + 2 > self.lines.capacity() {
+                        break;
+                    }
+                    let (mut a, mut b) = (*p, *p);
+                    a[axis] -= 0.0015;
+                    b[axis] += 0.0015;
+                    self.lines.push(LineVertex { position: a, colour: [1.0, 1.0, 0.6, 0.9] });
+                    self.lines.push(LineVertex { position: b, colour: [1.0, 1.0, 0.6, 0.9] });
+                }
+            }
+        }
         if self.ui.show_springs {
             for fam in crate::grid::axis_families() {
                 for (a, b) in self.grid.springs(fam) {
@@ -727,7 +792,17 @@ impl App {
         });
         if let Some(r) = view_response {
             self.view_rect = r.rect;
+            let sent = self.tools_sent;
             self.view_input(&r, &ctx);
+            if self.tools_sent > sent {
+                // Show this frame what the tool just did: wait (at most 3 ms, about 3 physics
+                // ticks) for the physics thread to apply and step it, instead of a frame later.
+                let deadline = Instant::now() + std::time::Duration::from_millis(3);
+                while self.latest.tool_commands < self.tools_sent && Instant::now() < deadline {
+                    std::thread::sleep(std::time::Duration::from_micros(200));
+                    self.physics.latest(&mut self.latest);
+                }
+            }
         }
         self.update_scene();
         let Some(gpu) = self.gpu.as_mut() else { return Ok(()) };
@@ -753,7 +828,12 @@ impl App {
         let (vx, vy) = ((rect.left() * ppp).max(0.0), (rect.top() * ppp).max(0.0));
         let vw = (rect.width() * ppp).min(gpu.config.width as f32 - vx).max(1.0);
         let vh = (rect.height() * ppp).min(gpu.config.height as f32 - vy).max(1.0);
-        gpu.cube.prepare(&gpu.queue, self.camera.view_proj(vw / vh), SurfaceStyle { colour_map: self.ui.colour != ColourMode::None, ..Default::default() }, &self.mesh, &self.lines);
+        let style = SurfaceStyle {
+            colour_map: self.ui.colour != ColourMode::None,
+            encode_srgb: !gpu.config.format.is_srgb(),
+            ..Default::default()
+        };
+        gpu.cube.prepare(&gpu.queue, self.camera.view_proj(vw / vh), style, &self.mesh, &self.lines);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         gpu.egui_renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &jobs, &screen);
         {
@@ -796,6 +876,16 @@ impl App {
         gpu.queue.submit([encoder.finish()]);
         gpu.window.pre_present_notify();
         gpu.queue.present(frame);
+        // Tool commands whose effect this frame showed: their input-to-photon latency.
+        let shown = self.latest.tool_commands;
+        while let Some(&(seq, sent)) = self.pending.front() {
+            if seq > shown {
+                break;
+            }
+            let l = sent.elapsed().as_secs_f64();
+            self.latency = (self.latency.0 + l, self.latency.1 + 1, self.latency.2.max(l));
+            self.pending.pop_front();
+        }
         for id in &full.textures_delta.free {
             gpu.egui_renderer.free_texture(id);
         }
@@ -804,8 +894,19 @@ impl App {
         if since.elapsed().as_secs_f64() >= 1.0 {
             self.fps = (self.frames - count) as f64 / since.elapsed().as_secs_f64();
             self.frame_clock = (Instant::now(), self.frames);
+            if self.latency.1 > 0 {
+                self.latency_shown = (self.latency.0 / self.latency.1 as f64, self.latency.2);
+                self.latency = (0.0, 0, 0.0);
+            }
             if self.max_frames.is_some() {
-                eprintln!("fps {:.1}, physics {:.0} ticks/s, {:.1} us/step", self.fps, self.latest.ticks_per_s, self.latest.step_us);
+                eprintln!(
+                    "fps {:.1}, physics {:.0} ticks/s, {:.1} us/step, tool latency mean {:.1} ms max {:.1} ms",
+                    self.fps,
+                    self.latest.ticks_per_s,
+                    self.latest.step_us,
+                    self.latency_shown.0 * 1e3,
+                    self.latency_shown.1 * 1e3
+                );
             }
         }
         Ok(())
@@ -837,20 +938,6 @@ fn error_vs_fem(pos: &[[f32; 3]], rest: &[[f32; 3]], fem: &[[f64; 3]]) -> (f64, 
         max = max.max(d);
     }
     (sum / pos.len().max(1) as f64, max)
-}
-
-/// The node nearest to the ray within `tol` metres of it, nearest to the eye first.
-fn pick_node(pos: &[[f32; 3]], o: Vec3, d: Vec3, tol: f32) -> Option<usize> {
-    let mut best: Option<(f32, usize)> = None;
-    for (i, p) in pos.iter().enumerate() {
-        let v = Vec3::from(*p) - o;
-        let t = v.dot(d);
-        let dist = (v - t * d).length();
-        if dist < tol && best.is_none_or(|(bt, _)| t < bt) {
-            best = Some((t, i));
-        }
-    }
-    best.map(|(_, i)| i)
 }
 
 fn legend(ui: &mut egui::Ui, rect: egui::Rect, mode: ColourMode, range: &str) {
@@ -938,7 +1025,8 @@ pub fn run(frames: Option<u64>, screenshot: Option<std::path::PathBuf>) -> anyho
         // The smoke test's screenshot: the same scene through the offscreen path.
         let headless = crate::render::offscreen::Headless::new()?;
         let (w, h) = (960, 540);
-        let rgba = headless.render((w, h), app.camera.view_proj(w as f32 / h as f32), SurfaceStyle { colour_map: app.ui.colour != ColourMode::None, ..Default::default() }, &app.mesh, &app.lines)?;
+        let style = SurfaceStyle { colour_map: app.ui.colour != ColourMode::None, ..Default::default() };
+        let rgba = headless.render((w, h), app.camera.view_proj(w as f32 / h as f32), style, &app.mesh, &app.lines)?;
         crate::io::write_atomic(&path, &crate::render::offscreen::encode_png(w, h, &rgba)?)?;
     }
     Ok(())

@@ -36,11 +36,13 @@ pub struct SurfaceStyle {
     pub colour_map: bool,
     /// Colour when the map is off (linear RGB).
     pub base_colour: [f32; 3],
+    /// The target is not sRGB: encode colours to sRGB in the shader.
+    pub encode_srgb: bool,
 }
 
 impl Default for SurfaceStyle {
     fn default() -> Self {
-        Self { colour_map: false, base_colour: [0.85, 0.45, 0.42] }
+        Self { colour_map: false, base_colour: [0.85, 0.45, 0.42], encode_srgb: false }
     }
 }
 
@@ -115,6 +117,8 @@ impl CubeRenderer {
                 bias: Default::default(),
             })
         };
+        // The surface is opaque (no blending: cheaper on software rasterisers); overlays blend.
+        let opaque = [Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })];
         let target = [Some(wgpu::ColorTargetState {
             format,
             blend: Some(wgpu::BlendState::ALPHA_BLENDING),
@@ -141,7 +145,7 @@ impl CubeRenderer {
                 module: &surface_shader,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
-                targets: &target,
+                targets: &opaque,
             }),
             multiview_mask: None,
             cache: None,
@@ -208,7 +212,7 @@ impl CubeRenderer {
         let g = Globals {
             view_proj: view_proj.to_cols_array_2d(),
             light_dir: [0.4, -0.5, 0.8, 0.0],
-            mode: [if style.colour_map { 1.0 } else { 0.0 }, 1.0, 0.0, 0.0],
+            mode: [if style.colour_map { 1.0 } else { 0.0 }, 1.0, if style.encode_srgb { 1.0 } else { 0.0 }, 0.0],
             base_colour: [style.base_colour[0], style.base_colour[1], style.base_colour[2], 1.0],
         };
         queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));

@@ -98,9 +98,60 @@ impl SurfaceMesh {
     }
 }
 
+impl SurfaceMesh {
+    /// The nearest intersection of the ray `o + t d` (`t > 0`) with the surface: the hit point
+    /// and the node of the hit triangle nearest to it (Moller-Trumbore).
+    pub fn pick(&self, o: [f32; 3], d: [f32; 3]) -> Option<([f32; 3], usize)> {
+        let sub = |a: [f32; 3], b: [f32; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let cross = |a: [f32; 3], b: [f32; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+        let mut best: Option<(f32, [u32; 3])> = None;
+        for t in self.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.vertices[i as usize].position);
+            let (e1, e2) = (sub(b, a), sub(c, a));
+            let p = cross(d, e2);
+            let det = dot(e1, p);
+            if det.abs() < 1e-12 {
+                continue;
+            }
+            let s = sub(o, a);
+            let u = dot(s, p) / det;
+            let q = cross(s, e1);
+            let v = dot(d, q) / det;
+            let dist = dot(e2, q) / det;
+            if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && dist > 0.0 && best.is_none_or(|(bt, _)| dist < bt) {
+                best = Some((dist, [t[0], t[1], t[2]]));
+            }
+        }
+        let (dist, tri) = best?;
+        let hit = [o[0] + dist * d[0], o[1] + dist * d[1], o[2] + dist * d[2]];
+        let vertex = tri
+            .into_iter()
+            .min_by(|&i, &j| {
+                let di = sub(self.vertices[i as usize].position, hit);
+                let dj = sub(self.vertices[j as usize].position, hit);
+                dot(di, di).total_cmp(&dot(dj, dj))
+            })
+            .unwrap_or(tri[0]);
+        Some((hit, self.vertex_node[vertex as usize] as usize))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pick_hits_the_top_face() {
+        let g = Grid::paper();
+        let mut m = SurfaceMesh::new(&g);
+        let x: Vec<[f32; 3]> = g.positions().iter().map(|p| p.map(|c| c as f32)).collect();
+        m.update(&x, None);
+        let (hit, node) = m.pick([0.044, 0.041, 0.5], [0.0, 0.0, -1.0]).unwrap();
+        assert!((hit[2] - 0.1).abs() < 1e-6);
+        assert_eq!(node, g.node(3, 3, 7));
+        assert!(m.pick([0.5, 0.5, 0.5], [0.0, 0.0, 1.0]).is_none());
+    }
 
     #[test]
     fn normals_point_outwards_at_rest() {
