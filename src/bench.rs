@@ -152,7 +152,8 @@ impl BenchReport {
         s += &format!("{:<46}: {}\n", "FEM static, 9 clamped cases (A, 8^3)", us(self.fem_static_9_cases_s));
         s += &format!("{:<46}: {}\n", "MSM static, 9 cases, closed form", us(self.msm_static_9_cases_s));
         s += &format!("{:<46}: {}\n", "MSM static, 9 cases, Newton (axis)", us(self.msm_static_9_cases_newton_s));
-        s += &format!("{:<46}: {}\n", "MSM static, 9 cases, Newton (shear)", us(self.msm_shear_static_9_cases_newton_s));
+        s +=
+            &format!("{:<46}: {}\n", "MSM static, 9 cases, Newton (shear)", us(self.msm_shear_static_9_cases_newton_s));
         s
     }
 }

@@ -124,8 +124,13 @@ pub fn parse_case_id(grid: &Grid, id: &str) -> Result<(String, LoadCase), String
     let bad = || format!("case id {id:?} is not of the form OBJECT_clamped|patch_axA_FF (e.g. A_clamped_ax1_F10)");
     let parts: Vec<&str> = id.split('_').collect();
     let [object, bc, axis, force] = parts[..] else { return Err(bad()) };
-    let axis: usize = axis.strip_prefix("ax").and_then(|a| a.parse().ok()).filter(|a| (1..=3).contains(a)).ok_or_else(bad)?;
-    let force: f64 = force.strip_prefix('F').and_then(|f| f.parse().ok()).filter(|f: &f64| f.is_finite() && *f >= 0.0).ok_or_else(bad)?;
+    let axis: usize =
+        axis.strip_prefix("ax").and_then(|a| a.parse().ok()).filter(|a| (1..=3).contains(a)).ok_or_else(bad)?;
+    let force: f64 = force
+        .strip_prefix('F')
+        .and_then(|f| f.parse().ok())
+        .filter(|f: &f64| f.is_finite() && *f >= 0.0)
+        .ok_or_else(bad)?;
     let case = match bc {
         "clamped" => LoadCase::clamped(grid, object, axis, force),
         "patch" => LoadCase::patch(grid, object, axis, force),

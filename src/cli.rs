@@ -359,7 +359,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         }) => {
             let material = object.material(None)?;
             let grid = grid.grid()?;
-            let settings = Settings { method, seed, population, generations, mutation, crossover, cost, ..Settings::default() };
+            let settings =
+                Settings { method, seed, population, generations, mutation, crossover, cost, ..Settings::default() };
             settings.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
             let mut space = GeneSpace::new(&material, &grid, model);
             for b in &bounds {

@@ -152,9 +152,7 @@ impl Grid {
     /// All elements, `(i, j, k)` with i fastest.
     pub fn elements(&self) -> impl Iterator<Item = [usize; 8]> + '_ {
         let m = self.n - 1;
-        (0..m).flat_map(move |k| {
-            (0..m).flat_map(move |j| (0..m).map(move |i| self.element_nodes(i, j, k)))
-        })
+        (0..m).flat_map(move |k| (0..m).flat_map(move |j| (0..m).map(move |i| self.element_nodes(i, j, k))))
     }
 
     /// Nodes on the face `coordinate[axis] = 0` (`high = false`) or `= L` (`high = true`), in
@@ -198,7 +196,7 @@ impl Grid {
     pub fn nested_dissection(&self) -> Vec<usize> {
         fn split(g: &Grid, lo: [usize; 3], hi: [usize; 3], out: &mut Vec<usize>) {
             let ext = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
-            if ext.iter().any(|&e| e == 0) {
+            if ext.contains(&0) {
                 return;
             }
             let a = (0..3).max_by_key(|&a| ext[a]).unwrap_or(0);
@@ -231,12 +229,7 @@ impl Grid {
     pub fn springs(&self, fam: SpringFamily) -> Vec<(usize, usize)> {
         let s = self.linear_offset(fam);
         let (lo, _, valid) = self.family_pairs(fam);
-        valid
-            .iter()
-            .enumerate()
-            .filter(|(_, v)| **v)
-            .map(|(p, _)| (lo + p, lo + p + s))
-            .collect()
+        valid.iter().enumerate().filter(|(_, v)| **v).map(|(p, _)| (lo + p, lo + p + s)).collect()
     }
 }
 
@@ -263,8 +256,7 @@ mod tests {
             let g = Grid::new(n).unwrap();
             let axis: usize = axis_families().iter().map(|f| g.springs(*f).len()).sum();
             assert_eq!(axis, 3 * n * n * (n - 1));
-            let diag: usize =
-                face_diagonal_families().iter().flatten().map(|f| g.springs(*f).len()).sum();
+            let diag: usize = face_diagonal_families().iter().flatten().map(|f| g.springs(*f).len()).sum();
             assert_eq!(diag, 6 * n * (n - 1) * (n - 1));
         }
         let g = Grid::paper();

@@ -96,20 +96,12 @@ pub struct Material {
 }
 
 fn check_finite(name: &'static str, value: f64) -> Result<(), MaterialError> {
-    if value.is_finite() {
-        Ok(())
-    } else {
-        Err(MaterialError::NotFinite { name, value })
-    }
+    if value.is_finite() { Ok(()) } else { Err(MaterialError::NotFinite { name, value }) }
 }
 
 fn check_positive(name: &'static str, value: f64) -> Result<(), MaterialError> {
     check_finite(name, value)?;
-    if value > 0.0 {
-        Ok(())
-    } else {
-        Err(MaterialError::NonPositive { name, value })
-    }
+    if value > 0.0 { Ok(()) } else { Err(MaterialError::NonPositive { name, value }) }
 }
 
 impl EngineeringConstants {
@@ -160,11 +152,7 @@ impl EngineeringConstants {
         let nu21 = self.nu12 * self.e2 / self.e1;
         let nu31 = self.nu13 * self.e3 / self.e1;
         let nu32 = self.nu23 * self.e3 / self.e2;
-        let det = 1.0
-            - self.nu12 * nu21
-            - self.nu23 * nu32
-            - self.nu13 * nu31
-            - 2.0 * nu21 * nu32 * self.nu13;
+        let det = 1.0 - self.nu12 * nu21 - self.nu23 * nu32 - self.nu13 * nu31 - 2.0 * nu21 * nu32 * self.nu13;
         if det <= 0.0 {
             return Err(MaterialError::NotPositiveDefinite(format!(
                 "1 - nu12 nu21 - nu23 nu32 - nu13 nu31 - 2 nu21 nu32 nu13 = {det:.6} must be positive \
@@ -226,15 +214,13 @@ impl Material {
         constants.validate()?;
         check_positive("density", density)?;
         let compliance = constants.compliance();
-        let chol = compliance.cholesky().ok_or_else(|| {
-            MaterialError::NotPositiveDefinite("Cholesky factorisation of S failed".into())
-        })?;
+        let chol = compliance
+            .cholesky()
+            .ok_or_else(|| MaterialError::NotPositiveDefinite("Cholesky factorisation of S failed".into()))?;
         let c = chol.inverse();
         let stiffness = (c + c.transpose()) * 0.5;
         if stiffness.cholesky().is_none() {
-            return Err(MaterialError::NotPositiveDefinite(
-                "Cholesky factorisation of C failed".into(),
-            ));
+            return Err(MaterialError::NotPositiveDefinite("Cholesky factorisation of C failed".into()));
         }
         Ok(Self { name, symmetry, constants, density, compliance, stiffness })
     }
@@ -278,22 +264,19 @@ impl Material {
     /// else TOML). See [`MaterialFile`] for the keys.
     pub fn from_file(path: &Path) -> Result<Self, MaterialError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| MaterialError::Io { path: shown.clone(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| MaterialError::Io { path: shown.clone(), source })?;
         let is_json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
         let file: MaterialFile = if is_json {
             serde_json::from_str(&text)
                 .map_err(|e| MaterialError::Parse { path: shown.clone(), message: e.to_string() })?
         } else {
-            toml::from_str(&text)
-                .map_err(|e| MaterialError::Parse { path: shown.clone(), message: e.to_string() })?
+            toml::from_str(&text).map_err(|e| MaterialError::Parse { path: shown.clone(), message: e.to_string() })?
         };
         let default_name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("custom");
-        file.into_material(default_name)
-            .map_err(|e| match e {
-                MaterialError::Parse { message, .. } => MaterialError::Parse { path: shown, message },
-                other => other,
-            })
+        file.into_material(default_name).map_err(|e| match e {
+            MaterialError::Parse { message, .. } => MaterialError::Parse { path: shown, message },
+            other => other,
+        })
     }
 
     /// `true` for a transversely isotropic material (its MSM has `k3 = k2`).

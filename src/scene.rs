@@ -88,16 +88,25 @@ impl StaticScene {
         let problem = Problem::new(material, grid, topology)?;
         let model = problem.model(&params)?;
         let u = crate::msm::statics::equilibrium(&model, &case)?;
-        let positions = rest.iter().zip(&u).map(|(r, d)| std::array::from_fn(|c| (r[c] + magnify * d[c]) as f32)).collect();
+        let positions =
+            rest.iter().zip(&u).map(|(r, d)| std::array::from_fn(|c| (r[c] + magnify * d[c]) as f32)).collect();
         let mut scalar_max = 0.0;
         let scalar = match colour {
             ColourMode::None => None,
-            ColourMode::Displacement => Some(u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() as f32).collect()),
+            ColourMode::Displacement => {
+                Some(u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() as f32).collect())
+            }
             ColourMode::Error => {
-                let fem = crate::fem::FemModel::new(grid, &problem.material).solve_cases(std::slice::from_ref(&case))?;
-                Some(u.iter().zip(&fem[0].displacements).map(|(a, b)| {
-                    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt() as f32
-                }).collect())
+                let fem =
+                    crate::fem::FemModel::new(grid, &problem.material).solve_cases(std::slice::from_ref(&case))?;
+                Some(
+                    u.iter()
+                        .zip(&fem[0].displacements)
+                        .map(|(a, b)| {
+                            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt() as f32
+                        })
+                        .collect(),
+                )
             }
         }
         .map(|mut v: Vec<f32>| {

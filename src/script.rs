@@ -66,7 +66,15 @@ pub enum Action {
     /// Pull a node towards a point.
     Drag { node: usize, to: [f64; 3], duration_s: f64 },
     /// Push the spherical probe into the tissue.
-    Probe { at: [f64; 3], direction: [f64; 3], radius: f64, depth: f64, duration_s: f64, #[serde(default = "default_samples")] samples: usize },
+    Probe {
+        at: [f64; 3],
+        direction: [f64; 3],
+        radius: f64,
+        depth: f64,
+        duration_s: f64,
+        #[serde(default = "default_samples")]
+        samples: usize,
+    },
     /// Let go of whatever tool is held.
     Release {},
     /// Let time pass.
@@ -130,7 +138,10 @@ pub struct Outcome {
 
 fn check(name: &str, v: f64, positive: bool) -> anyhow::Result<()> {
     if !v.is_finite() || v < 0.0 || (positive && v == 0.0) {
-        anyhow::bail!("script: {name} must be a {} finite number, got {v}", if positive { "positive" } else { "non-negative" });
+        anyhow::bail!(
+            "script: {name} must be a {} finite number, got {v}",
+            if positive { "positive" } else { "non-negative" }
+        );
     }
     Ok(())
 }
@@ -193,7 +204,8 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
                 let n = steps_for(*duration_s)?.max(1);
                 for s in 1..=n {
                     let f = s as f64 / n as f64;
-                    sim.tool = Tool::Drag { node: *node, target: std::array::from_fn(|c| from[c] + f * (to[c] - from[c])) };
+                    sim.tool =
+                        Tool::Drag { node: *node, target: std::array::from_fn(|c| from[c] + f * (to[c] - from[c])) };
                     step(&mut sim, &mut out);
                 }
             }
@@ -232,13 +244,21 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
                 }
             }
         }
-        let positions: Vec<[f64; 3]> = (0..grid.num_nodes()).map(|p| std::array::from_fn(|c| sim.dynamics.x[c][p])).collect();
+        let positions: Vec<[f64; 3]> =
+            (0..grid.num_nodes()).map(|p| std::array::from_fn(|c| sim.dynamics.x[c][p])).collect();
         let max_displacement_m = positions
             .iter()
             .zip(&rest)
             .map(|(x, r)| ((x[0] - r[0]).powi(2) + (x[1] - r[1]).powi(2) + (x[2] - r[2]).powi(2)).sqrt())
             .fold(0.0, f64::max);
-        out.events.push(Event { action: i, kind: kind.into(), time_s: sim.time_s, tool_force_n: sim.tool_force, max_displacement_m, positions });
+        out.events.push(Event {
+            action: i,
+            kind: kind.into(),
+            time_s: sim.time_s,
+            tool_force_n: sim.tool_force,
+            max_displacement_m,
+            positions,
+        });
     }
     Ok(out)
 }

@@ -226,7 +226,8 @@ impl Simulation {
         if let Tool::Drag { node, target } = self.tool {
             let mut f = [0.0; 3];
             for c in 0..3 {
-                f[c] = DRAG_STIFFNESS * (target[c] - self.dynamics.x[c][node]) - DRAG_DAMPING * self.dynamics.v[c][node];
+                f[c] =
+                    DRAG_STIFFNESS * (target[c] - self.dynamics.x[c][node]) - DRAG_DAMPING * self.dynamics.v[c][node];
                 self.dynamics.f_ext[c][node] += f[c];
             }
             self.tool_force = f.map(|v| -v);

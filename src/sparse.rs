@@ -9,9 +9,7 @@
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::perm::PermRef;
-use faer::sparse::linalg::cholesky::{
-    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
-};
+use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -124,13 +122,8 @@ impl SpdSystem {
             Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, n)),
             None => SymmetricOrdering::Amd,
         };
-        let symbolic = factorize_symbolic_cholesky(
-            pattern.as_ref(),
-            Side::Lower,
-            ordering,
-            Default::default(),
-        )
-        .map_err(|e| SparseError::Pattern(format!("{e:?}")))?;
+        let symbolic = factorize_symbolic_cholesky(pattern.as_ref(), Side::Lower, ordering, Default::default())
+            .map_err(|e| SparseError::Pattern(format!("{e:?}")))?;
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),

@@ -35,7 +35,12 @@ static GLOBAL: Counting = Counting;
 #[test]
 fn explicit_and_implicit_steps_do_not_allocate() {
     let grid = Grid::paper();
-    let params = MsmParams { c12: Some(200.0), c13: Some(200.0), c23: Some(200.0), ..MsmParams::axis(900.0, 1000.0, 1100.0, 0.5) };
+    let params = MsmParams {
+        c12: Some(200.0),
+        c13: Some(200.0),
+        c23: Some(200.0),
+        ..MsmParams::axis(900.0, 1000.0, 1100.0, 0.5)
+    };
     let model = MsmModel::new(grid, params, 1040.0).expect("model");
     let mut dynamics = Dynamics::new(&model);
     dynamics.apply_case(&LoadCase::clamped(&grid, "A", 1, 5.0));

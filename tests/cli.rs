@@ -112,8 +112,11 @@ fn bad_input_fails_cleanly_without_output() {
     .expect("write");
     let missing = dir.path().join("missing.toml");
     let nan_mat = dir.path().join("nan.json");
-    std::fs::write(&nan_mat, r#"{"symmetry":"transversely_isotropic","E1":1e5,"E2":-2e5,"nu12":0.3,"nu23":0.3,"G12":3e4}"#)
-        .expect("write");
+    std::fs::write(
+        &nan_mat,
+        r#"{"symmetry":"transversely_isotropic","E1":1e5,"E2":-2e5,"nu12":0.3,"nu23":0.3,"G12":3e4}"#,
+    )
+    .expect("write");
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (vec!["fem", "--object", "C", "--out", o], "possible values"),
         (vec!["fem", "--object", "A", "--nodes", "1", "--out", o], "at least 2"),
@@ -141,7 +144,17 @@ fn calibrate_writes_the_spec_result_deterministically() {
     let dir = tempfile::tempdir().expect("tempdir");
     let (a, b) = (dir.path().join("a.json"), dir.path().join("b.json"));
     for out in [&a, &b] {
-        let o = run(&["calibrate", "--object", "B", "--method", "hybrid", "--seed", "5", "--out", out.to_str().expect("utf8")]);
+        let o = run(&[
+            "calibrate",
+            "--object",
+            "B",
+            "--method",
+            "hybrid",
+            "--seed",
+            "5",
+            "--out",
+            out.to_str().expect("utf8"),
+        ]);
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(o.stderr.is_empty(), "quiet when not on a terminal: {}", stderr(&o));
     }
@@ -152,10 +165,15 @@ fn calibrate_writes_the_spec_result_deterministically() {
     };
     let v = strip(&a);
     assert_eq!(v, strip(&b), "same seed, same result (wall time aside)");
-    for key in ["object", "method", "seed", "population", "generations", "model", "params", "cost", "evaluations", "history"] {
+    for key in
+        ["object", "method", "seed", "population", "generations", "model", "params", "cost", "evaluations", "history"]
+    {
         assert!(!v[key].is_null(), "missing key {key}");
     }
-    assert_eq!((v["object"].as_str(), v["method"].as_str(), v["model"].as_str()), (Some("B"), Some("hybrid"), Some("axis")));
+    assert_eq!(
+        (v["object"].as_str(), v["method"].as_str(), v["model"].as_str()),
+        (Some("B"), Some("hybrid"), Some("axis"))
+    );
     assert_eq!(v["params"]["k3"], v["params"]["k2"]);
     assert_eq!(v["history"][100]["generation"].as_u64(), Some(100));
     for key in ["best_cost", "mean_fitness", "std_fitness"] {

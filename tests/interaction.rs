@@ -19,7 +19,14 @@ const TOP_NODE: [f64; 3] = [3.0 * 0.1 / 7.0, 3.0 * 0.1 / 7.0, 0.1];
 
 fn probe_then_release() -> Vec<Action> {
     vec![
-        Action::Probe { at: TOP_NODE, direction: [0.0, 0.0, -1.0], radius: 0.01, depth: 0.006, duration_s: 0.3, samples: 6 },
+        Action::Probe {
+            at: TOP_NODE,
+            direction: [0.0, 0.0, -1.0],
+            radius: 0.01,
+            depth: 0.006,
+            duration_s: 0.3,
+            samples: 6,
+        },
         Action::Wait { duration_s: 0.1 },
         Action::Release {},
         Action::Wait { duration_s: 1.0 },

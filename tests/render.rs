@@ -15,7 +15,8 @@ fn offscreen_render_shows_the_cube_and_its_deformation() {
         return;
     }
     let rest = StaticScene::new(None, Topology::Shear, ColourMode::Displacement, 1.0).expect("scene");
-    let case = StaticScene::new(Some("A_clamped_ax1_F10"), Topology::Shear, ColourMode::Displacement, 20.0).expect("scene");
+    let case =
+        StaticScene::new(Some("A_clamped_ax1_F10"), Topology::Shear, ColourMode::Displacement, 20.0).expect("scene");
     let (w, h) = (320, 200);
     let a = decode(&rest.render_png(w, h).expect("render").bytes);
     let b = decode(&case.render_png(w, h).expect("render").bytes);

@@ -46,15 +46,13 @@ impl Job {
         let handle = std::thread::Builder::new().name("calibration".into()).spawn(move || {
             let grid = Grid::paper();
             let space = GeneSpace::new(&material, &grid, topology);
-            let result = Problem::new(material, grid, topology)
+            let result = Problem::new(material, grid, topology).map_err(|e| e.to_string()).and_then(|problem| {
+                calibrate(&problem, &space, &settings, &flag, &mut |s| {
+                    let _ = tx.send(Progress::Generation(s.clone()));
+                    wake();
+                })
                 .map_err(|e| e.to_string())
-                .and_then(|problem| {
-                    calibrate(&problem, &space, &settings, &flag, &mut |s| {
-                        let _ = tx.send(Progress::Generation(s.clone()));
-                        wake();
-                    })
-                    .map_err(|e| e.to_string())
-                });
+            });
             let _ = tx.send(Progress::Done(result.map(Box::new)));
             wake();
         })?;

@@ -108,7 +108,13 @@ impl Drop for PhysicsThread {
     }
 }
 
-fn publish(sim: &Simulation, out: &Mutex<Published>, stats: (f64, f64, f64, f64), message: &Option<String>, tools: u64) {
+fn publish(
+    sim: &Simulation,
+    out: &Mutex<Published>,
+    stats: (f64, f64, f64, f64),
+    message: &Option<String>,
+    tools: u64,
+) {
     if let Ok(mut p) = out.lock() {
         let n = sim.model.grid.num_nodes();
         p.positions.resize(n, [0.0; 3]);

@@ -20,7 +20,7 @@ use crate::grid::Grid;
 use crate::material::Material;
 use crate::msm::{MsmModel, MsmParams, Topology};
 use crate::render::camera::OrbitCamera;
-use crate::render::gpu::{CubeRenderer, LineVertex, SurfaceStyle, depth_view};
+use crate::render::gpu::{CubeRenderer, LineVertex, SurfaceStyle, begin_cube_pass, depth_view};
 use crate::render::mesh::SurfaceMesh;
 use crate::render::{fixed_outline, normalise};
 use crate::scene::{ColourMode, tissue_params};
@@ -113,7 +113,14 @@ struct App {
     latency_shown: (f64, f64),
 }
 
-fn build_sim(material: &Material, topology: Topology, params: MsmParams, integrator: Integrator, dt: f64, case: Option<&LoadCase>) -> anyhow::Result<Simulation> {
+fn build_sim(
+    material: &Material,
+    topology: Topology,
+    params: MsmParams,
+    integrator: Integrator,
+    dt: f64,
+    case: Option<&LoadCase>,
+) -> anyhow::Result<Simulation> {
     let _ = topology;
     let model = MsmModel::new(Grid::paper(), params, material.density)?;
     Ok(Simulation::new(model, integrator, dt, case))
@@ -218,12 +225,7 @@ impl App {
         // On a software adapter a non-sRGB target spares egui a per-pixel gamma conversion (its
         // largest cost there); the cube's shader then encodes sRGB itself.
         let software = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
-        let format = caps
-            .formats
-            .iter()
-            .copied()
-            .find(|f| f.is_srgb() != software)
-            .unwrap_or(caps.formats[0]);
+        let format = caps.formats.iter().copied().find(|f| f.is_srgb() != software).unwrap_or(caps.formats[0]);
         // Mailbox where offered; on a software adapter (no real display to tear) Immediate, which
         // lets a CPU rasteriser run as fast as it can; Fifo otherwise.
         let present_mode = if software && caps.present_modes.contains(&wgpu::PresentMode::Immediate) {
@@ -288,7 +290,14 @@ impl App {
 
     fn rebuild(&mut self) {
         let case = self.ui.case_active.clone().unwrap_or_else(|| bottom_clamp(&self.grid));
-        match build_sim(&self.ui.material, self.ui.topology, self.ui.params, self.ui.integrator, self.ui.dt, Some(&case)) {
+        match build_sim(
+            &self.ui.material,
+            self.ui.topology,
+            self.ui.params,
+            self.ui.integrator,
+            self.ui.dt,
+            Some(&case),
+        ) {
             Ok(sim) => self.physics.send(Command::Replace(Box::new(sim))),
             Err(e) => self.ui.note = Some(format!("cannot build the model: {e:#}")),
         }
@@ -315,7 +324,10 @@ impl App {
                 // No shipped calibration: start from the material-derived scale and suggest calibrating.
                 let space = crate::calibrate::GeneSpace::new(&material, &self.grid, self.ui.topology);
                 let mid: Vec<f64> = space.lo.iter().zip(&space.hi).map(|(l, h)| (l * h).sqrt()).collect();
-                self.ui.note = Some(format!("{}: no calibrated tissue shipped; using the material's scale k* — press Calibrate", material.name));
+                self.ui.note = Some(format!(
+                    "{}: no calibrated tissue shipped; using the material's scale k* — press Calibrate",
+                    material.name
+                ));
                 space.params(&mid)
             }
         };
@@ -440,8 +452,10 @@ impl App {
         egui::CollapsingHeader::new("Integrator").default_open(true).show(ui, |ui| {
             let mut changed = false;
             ui.horizontal(|ui| {
-                changed |= ui.selectable_value(&mut self.ui.integrator, Integrator::Symplectic, "symplectic Euler").changed();
-                changed |= ui.selectable_value(&mut self.ui.integrator, Integrator::Implicit, "implicit Euler").changed();
+                changed |=
+                    ui.selectable_value(&mut self.ui.integrator, Integrator::Symplectic, "symplectic Euler").changed();
+                changed |=
+                    ui.selectable_value(&mut self.ui.integrator, Integrator::Implicit, "implicit Euler").changed();
             });
             let mut dt_ms = self.ui.dt * 1e3;
             if ui.add(egui::Slider::new(&mut dt_ms, 0.01..=5.0).logarithmic(true).text("dt (ms)")).changed() {
@@ -486,9 +500,12 @@ impl App {
             let f = self.latest.tool_force;
             ui.label(format!("force on tool: |F| = {:.4} N  ({:.4}, {:.4}, {:.4})", norm(f), f[0], f[1], f[2]));
             if self.ui.tool == ToolKind::Probe {
-                Plot::new("force_depth").height(130.0).x_axis_label("depth (mm)").y_axis_label("force (N)").show(ui, |p| {
-                    p.line(Line::new("force vs depth", PlotPoints::from(self.ui.force_depth.clone())));
-                });
+                Plot::new("force_depth").height(130.0).x_axis_label("depth (mm)").y_axis_label("force (N)").show(
+                    ui,
+                    |p| {
+                        p.line(Line::new("force vs depth", PlotPoints::from(self.ui.force_depth.clone())));
+                    },
+                );
             }
             ui.separator();
             ui.label("Paper's load case (clamped face, force on the opposite face):");
@@ -563,7 +580,9 @@ impl App {
                             ..Settings::default()
                         };
                         let ctx = self.egui.clone();
-                        match Job::start(self.ui.material.clone(), self.ui.topology, settings, move || ctx.request_repaint()) {
+                        match Job::start(self.ui.material.clone(), self.ui.topology, settings, move || {
+                            ctx.request_repaint()
+                        }) {
                             Ok(j) => {
                                 self.ui.job = Some(j);
                                 self.ui.history.clear();
@@ -597,13 +616,19 @@ impl App {
                 let pts = |f: &dyn Fn(&GenerationStats) -> f64| -> PlotPoints<'static> {
                     PlotPoints::from(self.ui.history.iter().map(|s| [s.generation as f64, f(s)]).collect::<Vec<_>>())
                 };
-                Plot::new("best").height(110.0).x_axis_label("generation").y_axis_label("best cost (m)").show(ui, |p| {
-                    p.line(Line::new("best cost", pts(&|s| s.best_cost)));
-                });
-                Plot::new("fitness").height(110.0).x_axis_label("generation").y_axis_label("fitness (1/m)").show(ui, |p| {
-                    p.line(Line::new("mean fitness", pts(&|s| s.mean_fitness)));
-                    p.line(Line::new("std of fitness", pts(&|s| s.std_fitness)));
-                });
+                Plot::new("best").height(110.0).x_axis_label("generation").y_axis_label("best cost (m)").show(
+                    ui,
+                    |p| {
+                        p.line(Line::new("best cost", pts(&|s| s.best_cost)));
+                    },
+                );
+                Plot::new("fitness").height(110.0).x_axis_label("generation").y_axis_label("fitness (1/m)").show(
+                    ui,
+                    |p| {
+                        p.line(Line::new("mean fitness", pts(&|s| s.mean_fitness)));
+                        p.line(Line::new("std of fitness", pts(&|s| s.std_fitness)));
+                    },
+                );
             }
         });
     }
@@ -646,7 +671,9 @@ impl App {
     fn view_input(&mut self, response: &egui::Response, ctx: &egui::Context) {
         let rect = response.rect;
         let aspect = rect.width() / rect.height().max(1.0);
-        let ndc = |p: egui::Pos2| [2.0 * (p.x - rect.left()) / rect.width() - 1.0, 1.0 - 2.0 * (p.y - rect.top()) / rect.height()];
+        let ndc = |p: egui::Pos2| {
+            [2.0 * (p.x - rect.left()) / rect.width() - 1.0, 1.0 - 2.0 * (p.y - rect.top()) / rect.height()]
+        };
         if response.hovered() {
             let scroll = ctx.input(|i| i.smooth_scroll_delta.y);
             if scroll != 0.0 {
@@ -660,19 +687,20 @@ impl App {
             self.camera.rotate(d.x, d.y);
             self.gesture = Gesture::Orbit;
         }
-        if response.drag_started_by(egui::PointerButton::Primary) && self.ui.tool != ToolKind::Orbit {
-            if let Some(pos) = response.interact_pointer_pos() {
-                let (o, d) = self.camera.ray(ndc(pos), aspect);
-                if let Some((hit, node)) = self.mesh.pick(o.to_array(), d.to_array()) {
-                    self.gesture = match self.ui.tool {
-                        ToolKind::Drag => Gesture::Drag { node, plane_point: Vec3::from(self.latest.positions[node]) },
-                        ToolKind::Probe => {
-                            self.ui.force_depth.clear();
-                            Gesture::Probe { contact: Vec3::from(hit), dir: d, start_y: pos.y }
-                        }
-                        ToolKind::Orbit => Gesture::None,
-                    };
-                }
+        if response.drag_started_by(egui::PointerButton::Primary)
+            && self.ui.tool != ToolKind::Orbit
+            && let Some(pos) = response.interact_pointer_pos()
+        {
+            let (o, d) = self.camera.ray(ndc(pos), aspect);
+            if let Some((hit, node)) = self.mesh.pick(o.to_array(), d.to_array()) {
+                self.gesture = match self.ui.tool {
+                    ToolKind::Drag => Gesture::Drag { node, plane_point: Vec3::from(self.latest.positions[node]) },
+                    ToolKind::Probe => {
+                        self.ui.force_depth.clear();
+                        Gesture::Probe { contact: Vec3::from(hit), dir: d, start_y: pos.y }
+                    }
+                    ToolKind::Orbit => Gesture::None,
+                };
             }
         }
         if response.dragged_by(egui::PointerButton::Primary)
@@ -730,7 +758,8 @@ impl App {
             ColourMode::Error => match &self.ui.fem_answer {
                 Some(fem) => {
                     for (i, s) in self.scalar.iter_mut().enumerate() {
-                        let target = Vec3::from(self.rest[i]) + Vec3::new(fem[i][0] as f32, fem[i][1] as f32, fem[i][2] as f32);
+                        let target =
+                            Vec3::from(self.rest[i]) + Vec3::new(fem[i][0] as f32, fem[i][1] as f32, fem[i][2] as f32);
                         *s = Vec3::from(pos[i]).distance(target);
                     }
                 }
@@ -817,7 +846,10 @@ impl App {
         };
         let view = frame.texture.create_view(&Default::default());
         let ppp = full.pixels_per_point;
-        let screen = egui_wgpu::ScreenDescriptor { size_in_pixels: [gpu.config.width, gpu.config.height], pixels_per_point: ppp };
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [gpu.config.width, gpu.config.height],
+            pixels_per_point: ppp,
+        };
         let jobs = ctx.tessellate(full.shapes, ppp);
         for (id, deltas) in &full.textures_delta.set {
             for delta in deltas {
@@ -837,23 +869,7 @@ impl App {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         gpu.egui_renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &jobs, &screen);
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("cube"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(crate::render::offscreen::BACKGROUND), store: wgpu::StoreOp::Store },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &gpu.depth,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = begin_cube_pass(&mut encoder, &view, &gpu.depth, crate::render::offscreen::BACKGROUND);
             pass.set_viewport(vx, vy, vw, vh, 0.0, 1.0);
             gpu.cube.draw(&mut pass);
         }
@@ -916,7 +932,13 @@ impl App {
         match self.ui.colour {
             ColourMode::None => String::new(),
             ColourMode::Displacement => {
-                let m = self.latest.positions.iter().zip(&self.rest).map(|(p, r)| Vec3::from(*p).distance(Vec3::from(*r))).fold(0.0f32, f32::max);
+                let m = self
+                    .latest
+                    .positions
+                    .iter()
+                    .zip(&self.rest)
+                    .map(|(p, r)| Vec3::from(*p).distance(Vec3::from(*r)))
+                    .fold(0.0f32, f32::max);
                 format!("0 .. {:.2} mm", (m.max(0.002)) * 1e3)
             }
             ColourMode::Error if self.ui.fem_answer.is_none() => "apply a load case for the FEM answer".into(),
@@ -949,17 +971,45 @@ fn legend(ui: &mut egui::Ui, rect: egui::Rect, mode: ColourMode, range: &str) {
         let t = i as f32 / steps as f32;
         let c = ramp(1.0 - t);
         let y = top + t * (bottom - top);
-        painter.rect_filled(egui::Rect::from_min_max(egui::pos2(x0, y), egui::pos2(x0 + 16.0, y + (bottom - top) / steps as f32 + 1.0)), 0.0, c);
+        painter.rect_filled(
+            egui::Rect::from_min_max(egui::pos2(x0, y), egui::pos2(x0 + 16.0, y + (bottom - top) / steps as f32 + 1.0)),
+            0.0,
+            c,
+        );
     }
     let title = match mode {
         ColourMode::Displacement => "displacement",
         ColourMode::Error => "MSM-FEM error",
         ColourMode::None => "",
     };
-    painter.text(egui::pos2(x0 + 16.0, top - 22.0), egui::Align2::RIGHT_BOTTOM, title, egui::FontId::proportional(13.0), egui::Color32::WHITE);
-    painter.text(egui::pos2(x0 - 6.0, top), egui::Align2::RIGHT_TOP, "max", egui::FontId::proportional(12.0), egui::Color32::WHITE);
-    painter.text(egui::pos2(x0 - 6.0, bottom), egui::Align2::RIGHT_BOTTOM, "0", egui::FontId::proportional(12.0), egui::Color32::WHITE);
-    painter.text(egui::pos2(x0 + 16.0, bottom + 6.0), egui::Align2::RIGHT_TOP, range, egui::FontId::proportional(12.0), egui::Color32::WHITE);
+    painter.text(
+        egui::pos2(x0 + 16.0, top - 22.0),
+        egui::Align2::RIGHT_BOTTOM,
+        title,
+        egui::FontId::proportional(13.0),
+        egui::Color32::WHITE,
+    );
+    painter.text(
+        egui::pos2(x0 - 6.0, top),
+        egui::Align2::RIGHT_TOP,
+        "max",
+        egui::FontId::proportional(12.0),
+        egui::Color32::WHITE,
+    );
+    painter.text(
+        egui::pos2(x0 - 6.0, bottom),
+        egui::Align2::RIGHT_BOTTOM,
+        "0",
+        egui::FontId::proportional(12.0),
+        egui::Color32::WHITE,
+    );
+    painter.text(
+        egui::pos2(x0 + 16.0, bottom + 6.0),
+        egui::Align2::RIGHT_TOP,
+        range,
+        egui::FontId::proportional(12.0),
+        egui::Color32::WHITE,
+    );
 }
 
 /// The shader's colour ramp, for the legend (same stops as `surface.wgsl`).

@@ -51,6 +51,17 @@ pub struct Problem {
     axial: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)>,
 }
 
+/// A case's answer without support reactions (the cost does not need them).
+fn unreacted(case: &LoadCase, displacements: Vec<[f64; 3]>) -> CaseSolution {
+    CaseSolution {
+        case_id: case.id.clone(),
+        axis: case.axis,
+        force_n: case.force_n,
+        displacements,
+        reaction_n: [0.0; 3],
+    }
+}
+
 /// Per-thread buffers of the shear model's solves: one tangent pattern per loaded axis, for the
 /// static and for the transient cost.
 #[derive(Debug, Default)]
@@ -113,14 +124,7 @@ impl Problem {
                 slot => slot.insert(TangentAssembler::new(&model, case_dofs(&self.grid, case))?),
             };
             let prepared = out.last().is_some_and(|prev| prev.axis == case.axis);
-            let displacements = super::transient::transient_displacements(&model, case, tangent, prepared)?;
-            out.push(CaseSolution {
-                case_id: case.id.clone(),
-                axis: case.axis,
-                force_n: case.force_n,
-                displacements,
-                reaction_n: [0.0; 3],
-            });
+            out.push(unreacted(case, super::transient::transient_displacements(&model, case, tangent, prepared)?));
         }
         Ok(out)
     }
@@ -154,10 +158,8 @@ impl Problem {
                         tangent.system.invalidate(); // factorised for other parameters
                     }
                     // Warm start: the previous force of the same axis, scaled.
-                    let start: Option<Vec<[f64; 3]>> = out
-                        .last()
-                        .filter(|prev| prev.axis == case.axis && prev.force_n > 0.0)
-                        .map(|prev| {
+                    let start: Option<Vec<[f64; 3]>> =
+                        out.last().filter(|prev| prev.axis == case.axis && prev.force_n > 0.0).map(|prev| {
                             let r = case.force_n / prev.force_n;
                             prev.displacements.iter().map(|u| u.map(|v| v * r)).collect()
                         });
@@ -165,13 +167,7 @@ impl Problem {
                     solve_newton_with(&model, case, opts, tangent, start.as_deref())?.0
                 }
             };
-            out.push(CaseSolution {
-                case_id: case.id.clone(),
-                axis: case.axis,
-                force_n: case.force_n,
-                displacements,
-                reaction_n: [0.0; 3],
-            });
+            out.push(unreacted(case, displacements));
         }
         Ok(out)
     }

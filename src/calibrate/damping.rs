@@ -18,8 +18,7 @@ use super::cost::CostError;
 /// and its angular frequency (rad/s).
 pub fn critical_damping(model: &MsmModel) -> Result<(f64, f64), CostError> {
     let grid = model.grid;
-    let rest: [Vec<f64>; 3] =
-        std::array::from_fn(|c| (0..grid.num_nodes()).map(|p| grid.position(p)[c]).collect());
+    let rest: [Vec<f64>; 3] = std::array::from_fn(|c| (0..grid.num_nodes()).map(|p| grid.position(p)[c]).collect());
     let mut omega_min = f64::INFINITY;
     for axis in 0..3 {
         let mut t = TangentAssembler::new(model, DofMap::clamped_symmetric(&grid, axis))?;

@@ -107,12 +107,7 @@ impl GeneSpace {
     pub fn params(&self, genes: &[f64]) -> MsmParams {
         let get = |name: &str| self.names.iter().position(|n| n == name).map(|i| genes[i]);
         let k2 = get("k2").unwrap_or(0.0);
-        let mut p = MsmParams::axis(
-            get("k1").unwrap_or(0.0),
-            k2,
-            get("k3").unwrap_or(k2),
-            get("d").unwrap_or(0.0),
-        );
+        let mut p = MsmParams::axis(get("k1").unwrap_or(0.0), k2, get("k3").unwrap_or(k2), get("d").unwrap_or(0.0));
         if let Some(c12) = get("c12") {
             p.c12 = Some(c12);
             p.c13 = Some(get("c13").unwrap_or(c12));

@@ -55,10 +55,7 @@ impl Evaluator<'_> {
     fn eval_many(&mut self, genes: &[Vec<f64>]) -> Result<Vec<f64>, CostError> {
         self.evaluations += genes.len() as u64;
         let (problem, space, mode) = (self.problem, self.space, self.mode);
-        genes
-            .par_iter()
-            .map_init(Workspace::default, |ws, g| problem.cost_in(mode, &space.params(g), ws))
-            .collect()
+        genes.par_iter().map_init(Workspace::default, |ws, g| problem.cost_in(mode, &space.params(g), ws)).collect()
     }
 }
 
@@ -241,7 +238,13 @@ pub fn annealing(
     let mut t = initial_temperature(&probe_cost);
     let beta = lundy_mees_beta(t, settings.t_final_ratio, settings.generations);
     let mut history = Vec::with_capacity(settings.generations + 1);
-    history.push(stats(0, &probe_cost, best_cost.min(probe_cost.iter().copied().fold(f64::INFINITY, f64::min)), eval.evaluations, t));
+    history.push(stats(
+        0,
+        &probe_cost,
+        best_cost.min(probe_cost.iter().copied().fold(f64::INFINITY, f64::min)),
+        eval.evaluations,
+        t,
+    ));
     on_generation(&history[0]);
     let mut cancelled = false;
     for generation in 1..=settings.generations {

@@ -149,7 +149,8 @@ mod tests {
     fn lattice_scheme_equals_the_chain_for_the_axis_model() {
         // Force the lattice path on an axis model by giving it zero-stiffness diagonals.
         let grid = Grid::paper();
-        let params = MsmParams { c12: Some(0.0), c13: Some(0.0), c23: Some(0.0), ..MsmParams::axis(900.0, 1000.0, 1100.0, 0.5) };
+        let params =
+            MsmParams { c12: Some(0.0), c13: Some(0.0), c23: Some(0.0), ..MsmParams::axis(900.0, 1000.0, 1100.0, 0.5) };
         let model = MsmModel::new(grid, params, 1040.0).unwrap();
         let case = LoadCase::clamped(&grid, "A", 2, 5.0);
         let mut t = TangentAssembler::new(&model, DofMap::clamped_symmetric(&grid, 1)).unwrap();

@@ -25,11 +25,7 @@ impl ForceScratch {
     /// Buffers for every family of `model`.
     pub fn new(model: &MsmModel) -> Self {
         let nn = model.grid.num_nodes();
-        let t = model
-            .families
-            .iter()
-            .map(|f| std::array::from_fn(|_| vec![0.0; nn + f.offset]))
-            .collect();
+        let t = model.families.iter().map(|f| std::array::from_fn(|_| vec![0.0; nn + f.offset])).collect();
         Self { t }
     }
 }

@@ -57,11 +57,7 @@ impl MsmParams {
 
     /// The topology these parameters describe: shear when any diagonal stiffness is set.
     pub fn topology(&self) -> Topology {
-        if self.c12.is_some() || self.c13.is_some() || self.c23.is_some() {
-            Topology::Shear
-        } else {
-            Topology::Axis
-        }
+        if self.c12.is_some() || self.c13.is_some() || self.c23.is_some() { Topology::Shear } else { Topology::Axis }
     }
 
     /// Checks ranges: axis stiffness positive, diagonal stiffness and damping non-negative, all finite.

@@ -30,7 +30,9 @@ pub enum StaticError {
     #[error(transparent)]
     Sparse(#[from] SparseError),
     /// Newton did not converge.
-    #[error("static MSM solve of {case} did not converge: relative residual {residual:.3e} after {iterations} iterations")]
+    #[error(
+        "static MSM solve of {case} did not converge: relative residual {residual:.3e} after {iterations} iterations"
+    )]
     NotConverged {
         /// Case id.
         case: String,
@@ -282,8 +284,7 @@ pub fn solve_cases(model: &MsmModel, cases: &[LoadCase]) -> Result<Vec<CaseSolut
 /// Sum of the support reactions: minus the spring forces acting on the fixed nodes.
 fn reaction(model: &MsmModel, case: &LoadCase, u: &[[f64; 3]]) -> [f64; 3] {
     let nn = model.grid.num_nodes();
-    let x: [Vec<f64>; 3] =
-        std::array::from_fn(|c| (0..nn).map(|p| model.grid.position(p)[c] + u[p][c]).collect());
+    let x: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|p| model.grid.position(p)[c] + u[p][c]).collect());
     let mut f: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
     add_spring_forces(model, &x, &mut f, &mut ForceScratch::new(model));
     let mut r = [0.0; 3];

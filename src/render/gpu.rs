@@ -76,7 +76,12 @@ pub const LINES_WGSL: &str = include_str!("../../shaders/lines.wgsl");
 impl CubeRenderer {
     /// Creates pipelines for colour target `format` and buffers for `mesh` and up to
     /// `max_line_vertices` overlay vertices.
-    pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat, mesh: &SurfaceMesh, max_line_vertices: usize) -> Self {
+    pub fn new(
+        device: &wgpu::Device,
+        format: wgpu::TextureFormat,
+        mesh: &SurfaceMesh,
+        max_line_vertices: usize,
+    ) -> Self {
         let surface_shader = shader(device, "surface.wgsl", SURFACE_WGSL);
         let line_shader = shader(device, "lines.wgsl", LINES_WGSL);
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
@@ -208,7 +213,14 @@ impl CubeRenderer {
     }
 
     /// Uploads this frame's camera, surface and overlays (overlays beyond capacity are dropped).
-    pub fn prepare(&mut self, queue: &wgpu::Queue, view_proj: Mat4, style: SurfaceStyle, mesh: &SurfaceMesh, lines: &[LineVertex]) {
+    pub fn prepare(
+        &mut self,
+        queue: &wgpu::Queue,
+        view_proj: Mat4,
+        style: SurfaceStyle,
+        mesh: &SurfaceMesh,
+        lines: &[LineVertex],
+    ) {
         let g = Globals {
             view_proj: view_proj.to_cols_array_2d(),
             light_dir: [0.4, -0.5, 0.8, 0.0],
@@ -238,6 +250,32 @@ impl CubeRenderer {
             pass.draw(0..self.line_count, 0..1);
         }
     }
+}
+
+/// Begins the cube's render pass: clears `view` to `clear` and `depth` to the far plane.
+pub fn begin_cube_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    view: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+    clear: wgpu::Color,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("cube"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
 
 /// A depth texture view of a given size.

@@ -3,7 +3,7 @@
 
 use glam::Mat4;
 
-use super::gpu::{CubeRenderer, LineVertex, SurfaceStyle, depth_view};
+use super::gpu::{CubeRenderer, LineVertex, SurfaceStyle, begin_cube_pass, depth_view};
 use super::mesh::SurfaceMesh;
 
 /// Colour format of offscreen images.
@@ -92,30 +92,18 @@ impl Headless {
         });
         let mut encoder = device.create_command_encoder(&Default::default());
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("cube"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(BACKGROUND), store: wgpu::StoreOp::Store },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = begin_cube_pass(&mut encoder, &view, &depth, BACKGROUND);
             renderer.draw(&mut pass);
         }
         encoder.copy_texture_to_buffer(
             target.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
                 buffer: &readback,
-                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(row), rows_per_image: Some(height) },
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(height),
+                },
             },
             wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
         );
@@ -147,6 +135,13 @@ pub const BACKGROUND: wgpu::Color = wgpu::Color { r: 0.06, g: 0.07, b: 0.09, a: 
 /// Encodes RGBA8 rows as PNG bytes.
 pub fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Result<Vec<u8>, image::ImageError> {
     let mut out = std::io::Cursor::new(Vec::new());
-    image::write_buffer_with_format(&mut out, rgba, width, height, image::ExtendedColorType::Rgba8, image::ImageFormat::Png)?;
+    image::write_buffer_with_format(
+        &mut out,
+        rgba,
+        width,
+        height,
+        image::ExtendedColorType::Rgba8,
+        image::ImageFormat::Png,
+    )?;
     Ok(out.into_inner())
 }

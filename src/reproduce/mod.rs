@@ -31,7 +31,11 @@ pub struct Options {
 
 /// The paper's Table III: `(k1, k2, k3, d)` for A and `(k1, k2, d)` for B.
 fn paper_params(object: &str) -> MsmParams {
-    if object == "A" { MsmParams::axis(968.2, 1010.0, 1137.7, 795.3) } else { MsmParams::axis(735.5, 679.9, 679.9, 537.2) }
+    if object == "A" {
+        MsmParams::axis(968.2, 1010.0, 1137.7, 795.3)
+    } else {
+        MsmParams::axis(735.5, 679.9, 679.9, 537.2)
+    }
 }
 
 /// The paper's Tables IV/V: (axis, force, avg %, max %); object B's axis 2/3 column serves both.
@@ -60,7 +64,9 @@ fn errors_of(problem: &Problem, params: &MsmParams) -> anyhow::Result<Vec<CaseEr
 
 /// Side-by-side table: ours vs the paper's, per force and axis.
 fn compare_table(ours: &[CaseError], paper: &[(usize, f64, f64, f64)]) -> String {
-    let mut s = String::from("| Force | Axis | ours avg % | paper avg % | ours max % | paper max % |\n|---|---|---|---|---|---|\n");
+    let mut s = String::from(
+        "| Force | Axis | ours avg % | paper avg % | ours max % | paper max % |\n|---|---|---|---|---|---|\n",
+    );
     for e in ours {
         let p = paper.iter().find(|p| p.0 == e.axis && p.1 == e.force_n);
         let (pa, pm) = p.map_or(("-".into(), "-".into()), |p| (format!("{:.2}", p.2), format!("{:.2}", p.3)));
@@ -119,7 +125,11 @@ pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
             "| ours, hybrid mean +- sd over seeds | {:.1} +- {:.1} | {:.1} +- {:.1} | {:.1} +- {:.1} | (not identified) |",
             stats[0].0, stats[0].1, stats[1].0, stats[1].1, stats[2].0, stats[2].1
         );
-        let _ = writeln!(md, "| exact optimum of the same cost | {:.1} | {:.1} | {:.1} | - |\n", k_opt[0], k_opt[1], k_opt[2]);
+        let _ = writeln!(
+            md,
+            "| exact optimum of the same cost | {:.1} | {:.1} | {:.1} | - |\n",
+            k_opt[0], k_opt[1], k_opt[2]
+        );
         let _ = writeln!(
             md,
             "Our `d` is {}. Eq. 1 compares equilibria, which do not depend on d, so the paper's d cannot be checked \
@@ -132,10 +142,17 @@ pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
         let table = if name == "A" { "IV" } else { "V" };
         let _ = writeln!(md, "### Table {table}: nodal error (% of h), our calibration vs the paper's table\n");
         md += &compare_table(&ours, &paper_errors(&name));
-        let _ = writeln!(md, "\nThe paper's own parameters evaluated against our FEM:\n\n```\n{}```\n", format_table(&format!("Object {name}, paper's Table III parameters"), &theirs_on_ours));
+        let _ = writeln!(
+            md,
+            "\nThe paper's own parameters evaluated against our FEM:\n\n```\n{}```\n",
+            format_table(&format!("Object {name}, paper's Table III parameters"), &theirs_on_ours)
+        );
         // Reliability and the figure.
         let _ = writeln!(md, "### Convergence (Fig. {fig})\n\nExact optimum of the cost: {optimum:.8e} m.\n");
-        let _ = writeln!(md, "| method | seeds within 0.1 % of the optimum | median cost / optimum - 1 | worst | evaluations per run |\n|---|---|---|---|---|");
+        let _ = writeln!(
+            md,
+            "| method | seeds within 0.1 % of the optimum | median cost / optimum - 1 | worst | evaluations per run |\n|---|---|---|---|---|"
+        );
         let mut csv = String::from("method,generation,mean_fitness,std_fitness,best_cost\n");
         let mut mean_series = Vec::new();
         let mut sd_series = Vec::new();
@@ -144,10 +161,18 @@ pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
             rel.sort_by(f64::total_cmp);
             let hits = rel.iter().filter(|&&r| r <= 1e-3).count();
             let evals = runs.iter().map(|r| r.evaluations).sum::<u64>() / runs.len() as u64;
-            let _ = writeln!(md, "| {method:?} | {hits}/{} | {:.2e} | {:.2e} | {evals} |", runs.len(), rel[rel.len() / 2], rel[rel.len() - 1]);
+            let _ = writeln!(
+                md,
+                "| {method:?} | {hits}/{} | {:.2e} | {:.2e} | {evals} |",
+                runs.len(),
+                rel[rel.len() / 2],
+                rel[rel.len() - 1]
+            );
             let gens = runs.iter().map(|r| r.history.len()).min().unwrap_or(0);
             let avg = |f: &dyn Fn(&crate::calibrate::GenerationStats) -> f64| -> Vec<(f64, f64)> {
-                (0..gens).map(|g| (g as f64, runs.iter().map(|r| f(&r.history[g])).sum::<f64>() / runs.len() as f64)).collect()
+                (0..gens)
+                    .map(|g| (g as f64, runs.iter().map(|r| f(&r.history[g])).sum::<f64>() / runs.len() as f64))
+                    .collect()
             };
             let m = avg(&|s| s.mean_fitness);
             let sd = avg(&|s| s.std_fitness);
@@ -166,7 +191,11 @@ pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
             "generation (SA: temperature step)",
             &[
                 ("average fitness", "1/m", means.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect()),
-                ("standard deviation of fitness", "1/m", sds.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect()),
+                (
+                    "standard deviation of fitness",
+                    "1/m",
+                    sds.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect(),
+                ),
             ],
         )?;
         let fig_name = format!("fig{fig}_object_{name}.svg");
@@ -174,7 +203,12 @@ pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
         write_atomic(&dir.join(format!("fig{fig}_object_{name}.csv")), csv.as_bytes())?;
         let _ = writeln!(md, "\n![Fig. {fig}]({fig_name})\n");
         // Bounds study: the hybrid with wider boxes.
-        let _ = writeln!(md, "### Search bounds\n\nDefault box: k in [k*/2, 2 k*] with k* = E L^2/(n^2 h) ({}). Hybrid, same budget, seeds 1..={}:\n", space.names.join(", "), opts.seeds);
+        let _ = writeln!(
+            md,
+            "### Search bounds\n\nDefault box: k in [k*/2, 2 k*] with k* = E L^2/(n^2 h) ({}). Hybrid, same budget, seeds 1..={}:\n",
+            space.names.join(", "),
+            opts.seeds
+        );
         let _ = writeln!(md, "| box for k | seeds within 0.1 % | worst cost / optimum - 1 |\n|---|---|---|");
         for widen in [2.0, 10.0, 100.0] {
             let mut wide = space.clone();

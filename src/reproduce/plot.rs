@@ -10,7 +10,8 @@ pub struct Series<'a> {
     pub points: Vec<(f64, f64)>,
 }
 
-const COLOURS: [RGBColor; 4] = [RGBColor(31, 119, 180), RGBColor(214, 39, 40), RGBColor(44, 160, 44), RGBColor(148, 103, 189)];
+const COLOURS: [RGBColor; 4] =
+    [RGBColor(31, 119, 180), RGBColor(214, 39, 40), RGBColor(44, 160, 44), RGBColor(148, 103, 189)];
 
 /// Renders panels side by side (one `(title, y label, series)` each) into an SVG string.
 pub fn line_panels(title: &str, x_label: &str, panels: &[(&str, &str, Vec<Series<'_>>)]) -> anyhow::Result<String> {
