@@ -251,7 +251,11 @@ impl App {
         let depth = depth_view(&device, config.width, config.height);
         let cube = CubeRenderer::new(&device, format, &self.mesh, self.lines.capacity());
         // Dithering is a per-pixel cost a software rasteriser feels; it only hides banding.
-        let options = egui_wgpu::RendererOptions { dithering: !software, ..Default::default() };
+        let options = egui_wgpu::RendererOptions {
+            dithering: !software,
+            depth_stencil_format: Some(crate::render::gpu::DEPTH_FORMAT),
+            ..Default::default()
+        };
         let egui_renderer = egui_wgpu::Renderer::new(&device, format, options);
         let egui_state = egui_winit::State::new(
             self.egui.clone(),
@@ -262,6 +266,11 @@ impl App {
             None,
         );
         log_adapter(&adapter.get_info());
+        if software {
+            // Feathering (anti-aliased shape edges) adds thin triangles everywhere; text keeps its
+            // anti-aliasing from the font atlas. About +15 % frame rate on lavapipe.
+            self.egui.tessellation_options_mut(|o| o.feathering = false);
+        }
         self.gpu = Some(Gpu { window, surface, device, queue, config, depth, cube, egui_renderer, egui_state });
         Ok(())
     }
@@ -869,24 +878,12 @@ impl App {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         gpu.egui_renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &jobs, &screen);
         {
+            // One pass for both: the cube in its viewport, then egui over the whole window (its
+            // pipeline carries the same depth format and ignores depth).
             let mut pass = begin_cube_pass(&mut encoder, &view, &gpu.depth, crate::render::offscreen::BACKGROUND);
             pass.set_viewport(vx, vy, vw, vh, 0.0, 1.0);
             gpu.cube.draw(&mut pass);
-        }
-        {
-            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("egui"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            pass.set_viewport(0.0, 0.0, gpu.config.width as f32, gpu.config.height as f32, 0.0, 1.0);
             gpu.egui_renderer.render(&mut pass.forget_lifetime(), &jobs, &screen);
         }
         gpu.queue.submit([encoder.finish()]);
