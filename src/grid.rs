@@ -24,7 +24,8 @@ pub enum GridError {
 }
 
 /// Largest supported number of nodes per axis.
-pub const MAX_NODES_PER_AXIS: usize = 128;
+/// (The FEM's sparse Cholesky needs about 1.5 GB at 32^3 and grows like n^6.)
+pub const MAX_NODES_PER_AXIS: usize = 40;
 
 /// An `n x n x n` node cube of side [`CUBE_SIDE_M`].
 #[derive(Debug, Clone, Copy, PartialEq)]

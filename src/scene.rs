@@ -30,6 +30,14 @@ pub enum ColourMode {
 /// model (the viewer's default) or the paper's axis-spring model, both calibrated by this program
 /// (hybrid GA+SA, seed 1, static cost; see each file's `note`).
 pub fn tissue_params(material: &Material, topology: Topology) -> anyhow::Result<MsmParams> {
+    let is_preset = Material::preset(&material.name)
+        .is_some_and(|p| p.constants == material.constants && p.density == material.density);
+    if !is_preset {
+        anyhow::bail!(
+            "no calibrated tissue is shipped for material {:?} (only the presets A and B); calibrate one",
+            material.name
+        );
+    }
     let text = match (material.name.as_str(), topology) {
         ("A", Topology::Shear) => include_str!("../assets/tissue_A_shear.json"),
         ("B", Topology::Shear) => include_str!("../assets/tissue_B_shear.json"),
@@ -82,6 +90,9 @@ impl StaticScene {
             return Ok(Self { grid, positions, scalar, scalar_max: 0.0, fixed: vec![false; grid.num_nodes()] });
         };
         let (object, case) = parse_case_id(&grid, id).map_err(|e| anyhow::anyhow!(e))?;
+        if case.bc != crate::cases::Bc::Clamped {
+            anyhow::bail!("case {id}: only clamped cases can be shown; the mass-spring model has no roller supports");
+        }
         let material = Material::preset(&object)
             .with_context(|| format!("case {id}: unknown object {object:?} (the presets are A and B)"))?;
         let params = tissue_params(&material, topology)?;

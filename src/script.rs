@@ -152,8 +152,8 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     let material = Material::preset(&script.object)
         .ok_or_else(|| anyhow::anyhow!("script: object must be A or B, got {:?}", script.object))?;
     check("dt", script.dt, true)?;
-    if script.dt > 0.05 {
-        anyhow::bail!("script: dt = {} s is too large (at most 0.05 s)", script.dt);
+    if !(1e-6..=0.05).contains(&script.dt) {
+        anyhow::bail!("script: dt = {} s is out of range (1e-6 to 0.05 s)", script.dt);
     }
     let params = tissue_params(&material, script.model)?;
     let model = MsmModel::new(grid, params, material.density)?;
@@ -165,7 +165,15 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
             c.load.fill(0.0);
             Some(c)
         }
-        id => Some(parse_case_id(&grid, id).map_err(|e| anyhow::anyhow!("script: clamp: {e}"))?.1),
+        id => {
+            let case = parse_case_id(&grid, id).map_err(|e| anyhow::anyhow!("script: clamp: {e}"))?.1;
+            if case.bc != crate::cases::Bc::Clamped {
+                anyhow::bail!(
+                    "script: clamp: {id} is a patch case; its roller supports hold single components, which the mass-spring model does not represent (use a clamped case)"
+                );
+            }
+            Some(case)
+        }
     };
     let mut sim = Simulation::new(model, integrator, script.dt, case.as_ref());
     let rest = grid.positions();
@@ -185,7 +193,11 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         if d > 100.0 {
             anyhow::bail!("script: duration_s = {d} s is too long (at most 100 s)");
         }
-        Ok((d / script.dt).round() as u64)
+        let steps = (d / script.dt).round();
+        if steps > 1e7 {
+            anyhow::bail!("script: duration_s = {d} s at dt = {} s is more than 1e7 steps", script.dt);
+        }
+        Ok(steps as u64)
     };
     for (i, action) in script.actions.iter().enumerate() {
         let kind;

@@ -74,6 +74,8 @@ pub struct Simulation {
     good_time: Option<f64>,
     steps_since_good: usize,
     contact_forces: [Vec<f64>; 3],
+    /// [`Simulation::explicit_dt_limit`] of the current model.
+    dt_limit: f64,
 }
 
 impl Simulation {
@@ -97,6 +99,7 @@ impl Simulation {
             good_time: None,
             steps_since_good: 0,
             contact_forces: zeros(),
+            dt_limit: Self::explicit_dt_limit(&model),
             model,
             dynamics,
         }
@@ -132,6 +135,7 @@ impl Simulation {
         let density = self.model.node_mass * self.model.grid.num_nodes() as f64 / crate::grid::CUBE_SIDE_M.powi(3);
         self.model = MsmModel::new(self.model.grid, params, density)?;
         self.dynamics.set_model(&self.model);
+        self.dt_limit = Self::explicit_dt_limit(&self.model);
         Ok(())
     }
 
@@ -146,9 +150,14 @@ impl Simulation {
 
     /// Back to rest (positions and velocities), keeping fixed nodes and loads.
     pub fn reset(&mut self) {
-        let fresh = Dynamics::new(&self.model);
-        self.dynamics.x = fresh.x;
-        self.dynamics.v = fresh.v;
+        let grid = self.model.grid;
+        for p in 0..grid.num_nodes() {
+            let r = grid.position(p);
+            for c in 0..3 {
+                self.dynamics.x[c][p] = r[c];
+                self.dynamics.v[c][p] = 0.0;
+            }
+        }
         self.time_s = 0.0;
         self.good_time = None;
     }
@@ -178,7 +187,7 @@ impl Simulation {
             }
             return Ok(());
         }
-        let limit = Self::explicit_dt_limit(&self.model);
+        let limit = self.dt_limit;
         let message = match (stepped, self.integrator) {
             (Err(e), _) => format!("the implicit solve failed ({e}); the state was reset"),
             (Ok(()), Integrator::Symplectic) if self.dt > limit => format!(
@@ -222,6 +231,9 @@ impl Simulation {
     fn apply_tool_load(&mut self) {
         for c in 0..3 {
             self.dynamics.f_ext[c].copy_from_slice(&self.base_load[c]);
+        }
+        if self.tool == Tool::None {
+            self.tool_force = [0.0; 3];
         }
         if let Tool::Drag { node, target } = self.tool {
             let mut f = [0.0; 3];

@@ -98,3 +98,16 @@ fn explicit_blow_up_is_caught_and_nothing_nan_is_reported() {
     let out = run(&s).expect("script runs");
     assert!(out.blow_ups.is_empty(), "{:?}", out.blow_ups);
 }
+
+#[test]
+fn bad_scripts_are_refused_with_a_reason() {
+    let mut s = script(vec![Action::Wait { duration_s: 0.01 }]);
+    s.clamp = "A_patch_ax1_F10".into();
+    let e = run(&s).expect_err("patch supports are not modelled").to_string();
+    assert!(e.contains("patch"), "{e}");
+    let mut s = script(vec![Action::Wait { duration_s: 100.0 }]);
+    s.dt = 1e-7;
+    assert!(run(&s).expect_err("dt too small").to_string().contains("dt"));
+    let s = script(vec![Action::Drag { node: 9999, to: [0.0; 3], duration_s: 0.1 }]);
+    assert!(run(&s).expect_err("no such node").to_string().contains("node 9999"));
+}

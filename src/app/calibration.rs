@@ -64,6 +64,11 @@ impl Job {
         self.rx.try_iter().collect()
     }
 
+    /// Whether the thread has ended (check [`Job::poll`] first for its result).
+    pub fn finished(&self) -> bool {
+        self.handle.as_ref().is_none_or(JoinHandle::is_finished)
+    }
+
     /// Asks the run to stop (within one generation).
     pub fn cancel(&self) {
         self.cancel.store(true, Ordering::Relaxed);

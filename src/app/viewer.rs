@@ -644,7 +644,11 @@ impl App {
 
     fn poll_background(&mut self) {
         if let Some(job) = &self.ui.job {
+            let mut ended = false;
+            // Read before polling: a thread that had finished has its last message queued.
+            let finished = job.finished();
             for msg in job.poll() {
+                ended |= matches!(msg, Progress::Done(_));
                 match msg {
                     Progress::Generation(s) => self.ui.history.push(s),
                     Progress::Done(Ok(r)) => {
@@ -661,7 +665,12 @@ impl App {
                     Progress::Done(Err(e)) => self.ui.note = Some(format!("calibration failed: {e}")),
                 }
             }
-            if self.ui.note.as_deref().is_some_and(|n| n.starts_with("calibration")) {
+            if !ended && finished {
+                // The thread ended without a result (it panicked): free the slot and say so.
+                self.ui.note = Some("the calibration stopped unexpectedly; no result".into());
+                ended = true;
+            }
+            if ended {
                 self.ui.job = None;
             }
         }
@@ -753,6 +762,9 @@ impl App {
         let n = self.grid.num_nodes();
         if self.latest.positions.len() != n {
             self.latest.positions.clone_from(&self.rest);
+        }
+        if self.latest.fixed.len() != n {
+            self.latest.fixed = vec![false; n];
         }
         let pos = &self.latest.positions;
         let mut max = None;

@@ -52,10 +52,15 @@ struct Evaluator<'a> {
 }
 
 impl Evaluator<'_> {
+    /// Costs of many chromosomes in parallel. A chromosome whose model cannot be solved (a static
+    /// solve that does not converge, say) gets an infinite cost: the search moves on without it.
     fn eval_many(&mut self, genes: &[Vec<f64>]) -> Result<Vec<f64>, CostError> {
         self.evaluations += genes.len() as u64;
         let (problem, space, mode) = (self.problem, self.space, self.mode);
-        genes.par_iter().map_init(Workspace::default, |ws, g| problem.cost_in(mode, &space.params(g), ws)).collect()
+        Ok(genes
+            .par_iter()
+            .map_init(Workspace::default, |ws, g| problem.cost_in(mode, &space.params(g), ws).unwrap_or(f64::INFINITY))
+            .collect())
     }
 }
 
@@ -102,8 +107,12 @@ fn roulette(rng: &mut Xoshiro256PlusPlus, fitness: &[f64], total: f64) -> usize 
 }
 
 fn initial_temperature(costs: &[f64]) -> f64 {
-    let mean = costs.iter().sum::<f64>() / costs.len() as f64;
-    let sd = (costs.iter().map(|c| (c - mean).powi(2)).sum::<f64>() / costs.len() as f64).sqrt();
+    let finite: Vec<f64> = costs.iter().copied().filter(|c| c.is_finite()).collect();
+    if finite.is_empty() {
+        return 1.0;
+    }
+    let mean = finite.iter().sum::<f64>() / finite.len() as f64;
+    let sd = (finite.iter().map(|c| (c - mean).powi(2)).sum::<f64>() / finite.len() as f64).sqrt();
     if sd > 0.0 { sd } else { mean.abs().max(1e-12) * 0.1 }
 }
 

@@ -21,6 +21,8 @@ pub struct Dynamics {
     f: [Vec<f64>; 3],
     scratch: ForceScratch,
     implicit: Option<ImplicitWork>,
+    /// Linear offsets of the model's spring families (the topology the buffers are built for).
+    family_offsets: Vec<usize>,
 }
 
 #[derive(Debug)]
@@ -45,6 +47,7 @@ impl Dynamics {
             f: zeros(),
             scratch: ForceScratch::new(model),
             implicit: None,
+            family_offsets: model.families.iter().map(|f| f.offset).collect(),
         }
     }
 
@@ -65,8 +68,14 @@ impl Dynamics {
     /// another topology), keeping positions, velocities, loads and fixed nodes.
     pub fn set_model(&mut self, model: &MsmModel) {
         debug_assert_eq!(model.grid.num_nodes(), self.free.len());
-        self.scratch = ForceScratch::new(model);
-        self.implicit = None;
+        let offsets: Vec<usize> = model.families.iter().map(|f| f.offset).collect();
+        if offsets != self.family_offsets {
+            // Another spring topology: new buffers and a new sparse pattern. (Same topology: the
+            // pattern stays, stiffness is read at assembly.)
+            self.scratch = ForceScratch::new(model);
+            self.implicit = None;
+            self.family_offsets = offsets;
+        }
     }
 
     /// Total spring + external force on each node at the current positions (no damping).

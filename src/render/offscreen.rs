@@ -22,8 +22,8 @@ pub enum RenderError {
     #[error("cannot read the rendered image back: {0}")]
     Readback(String),
     /// The requested size is not renderable.
-    #[error("image size {0} x {1} is out of range (1..=8192)")]
-    Size(u32, u32),
+    #[error("image size {0} x {1} is out of range (1..={2} on this adapter)")]
+    Size(u32, u32, u32),
 }
 
 /// A headless device.
@@ -65,8 +65,9 @@ impl Headless {
         lines: &[LineVertex],
     ) -> Result<Vec<u8>, RenderError> {
         let (width, height) = size;
-        if !(1..=8192).contains(&width) || !(1..=8192).contains(&height) {
-            return Err(RenderError::Size(width, height));
+        let max = self.device.limits().max_texture_dimension_2d.min(8192);
+        if !(1..=max).contains(&width) || !(1..=max).contains(&height) {
+            return Err(RenderError::Size(width, height, max));
         }
         let device = &self.device;
         let mut renderer = CubeRenderer::new(device, FORMAT, mesh, lines.len());
