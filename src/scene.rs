@@ -12,7 +12,7 @@ use crate::render::camera::OrbitCamera;
 use crate::render::gpu::{LineVertex, SurfaceStyle};
 use crate::render::mesh::SurfaceMesh;
 use crate::render::offscreen::{Headless, encode_png};
-use crate::render::{fixed_outline, normalise};
+use crate::render::{fixed_outline, lattice_edges, normalise};
 
 /// Per-node colour map.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
@@ -133,7 +133,9 @@ impl StaticScene {
         let mut mesh = SurfaceMesh::new(&self.grid);
         mesh.update(&self.positions, self.scalar.as_deref());
         let mut lines: Vec<LineVertex> = Vec::new();
-        fixed_outline(&self.grid, &self.positions, &self.fixed, [0.2, 0.9, 0.3, 1.0], &mut lines);
+        let edges = lattice_edges(&self.grid);
+        lines.reserve(2 * edges.len());
+        fixed_outline(&edges, &self.positions, &self.fixed, [0.2, 0.9, 0.3, 1.0], &mut lines);
         let style = SurfaceStyle { colour_map: self.scalar.is_some(), ..SurfaceStyle::default() };
         let view_proj = OrbitCamera::default().view_proj(width as f32 / height.max(1) as f32);
         let rgba = headless.render((width, height), view_proj, style, &mesh, &lines)?;

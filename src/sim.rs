@@ -127,7 +127,12 @@ impl Simulation {
     /// The integrator to use by default for `dt`: symplectic when `dt` is safely below its
     /// limit, implicit otherwise.
     pub fn default_integrator(model: &MsmModel, dt: f64) -> Integrator {
-        if dt <= 0.5 * Self::explicit_dt_limit(model) { Integrator::Symplectic } else { Integrator::Implicit }
+        Self::integrator_for(dt, Self::explicit_dt_limit(model))
+    }
+
+    /// Symplectic when `dt` is at most half the explicit limit `limit`, implicit otherwise.
+    pub fn integrator_for(dt: f64, limit: f64) -> Integrator {
+        if dt <= 0.5 * limit { Integrator::Symplectic } else { Integrator::Implicit }
     }
 
     /// Replaces the parameters, keeping the state (a calibration result applied live).

@@ -22,7 +22,7 @@ use crate::msm::{MsmModel, MsmParams, Topology};
 use crate::render::camera::OrbitCamera;
 use crate::render::gpu::{CubeRenderer, LineVertex, SurfaceStyle, begin_cube_pass, depth_view};
 use crate::render::mesh::SurfaceMesh;
-use crate::render::{fixed_outline, normalise};
+use crate::render::{fixed_outline, lattice_edges, normalise, push_edges};
 use crate::scene::{ColourMode, tissue_params};
 use crate::sim::{Integrator, Simulation, Tool};
 
@@ -42,6 +42,8 @@ struct Ui {
     params: MsmParams,
     integrator: Integrator,
     dt: f64,
+    /// Explicit stability limit of the current parameters, s (refreshed when they change).
+    dt_limit: f64,
     tool: ToolKind,
     probe_radius_mm: f64,
     colour: ColourMode,
@@ -95,6 +97,8 @@ struct App {
     gesture: Gesture,
     mesh: SurfaceMesh,
     grid: Grid,
+    /// The grid's edges, for the spring and fixed-face overlays.
+    edges: Vec<(usize, usize)>,
     lines: Vec<LineVertex>,
     scalar: Vec<f32>,
     rest: Vec<[f32; 3]>,
@@ -158,6 +162,7 @@ impl App {
                 params,
                 integrator,
                 dt,
+                dt_limit: Simulation::explicit_dt_limit(&model),
                 tool: ToolKind::Drag,
                 probe_radius_mm: 15.0,
                 colour: ColourMode::Displacement,
@@ -182,6 +187,7 @@ impl App {
             camera: OrbitCamera::default(),
             gesture: Gesture::None,
             mesh: SurfaceMesh::new(&grid),
+            edges: lattice_edges(&grid),
             grid,
             lines: Vec::with_capacity(2 * 6000),
             scalar: vec![0.0; grid.num_nodes()],
@@ -295,6 +301,13 @@ impl App {
 
     fn send_params(&mut self) {
         self.physics.send(Command::SetParams(self.ui.params));
+        self.refresh_dt_limit();
+    }
+
+    fn refresh_dt_limit(&mut self) {
+        if let Ok(model) = MsmModel::new(self.grid, self.ui.params, self.ui.material.density) {
+            self.ui.dt_limit = Simulation::explicit_dt_limit(&model);
+        }
     }
 
     fn rebuild(&mut self) {
@@ -342,6 +355,7 @@ impl App {
         };
         self.ui.material = material;
         self.ui.params = params;
+        self.refresh_dt_limit();
         self.ui.case_active = None;
         self.ui.fem_answer = None;
         self.rebuild();
@@ -471,22 +485,20 @@ impl App {
                 self.ui.dt = dt_ms * 1e-3;
                 changed = true;
             }
-            if let Ok(model) = MsmModel::new(self.grid, self.ui.params, self.ui.material.density) {
-                let limit = Simulation::explicit_dt_limit(&model);
-                ui.label(format!("explicit stability limit ~ {:.3} ms", limit * 1e3));
-                if ui.button("auto (explicit when safe)").clicked() {
-                    self.ui.integrator = Simulation::default_integrator(&model, self.ui.dt);
-                    changed = true;
-                }
-                // Never leave the explicit integrator running where it would be unstable.
-                if changed && self.ui.integrator == Integrator::Symplectic && self.ui.dt > 0.9 * limit {
-                    self.ui.integrator = Integrator::Implicit;
-                    self.ui.note = Some(format!(
-                        "dt = {:.3} ms is above 0.9 x the explicit limit ({:.3} ms): switched to implicit Euler",
-                        self.ui.dt * 1e3,
-                        limit * 1e3
-                    ));
-                }
+            let limit = self.ui.dt_limit;
+            ui.label(format!("explicit stability limit ~ {:.3} ms", limit * 1e3));
+            if ui.button("auto (explicit when safe)").clicked() {
+                self.ui.integrator = Simulation::integrator_for(self.ui.dt, limit);
+                changed = true;
+            }
+            // Never leave the explicit integrator running where it would be unstable.
+            if changed && self.ui.integrator == Integrator::Symplectic && self.ui.dt > 0.9 * limit {
+                self.ui.integrator = Integrator::Implicit;
+                self.ui.note = Some(format!(
+                    "dt = {:.3} ms is above 0.9 x the explicit limit ({:.3} ms): switched to implicit Euler",
+                    self.ui.dt * 1e3,
+                    limit * 1e3
+                ));
             }
             if changed {
                 self.physics.send(Command::SetIntegrator(self.ui.integrator, self.ui.dt));
@@ -792,7 +804,7 @@ impl App {
         self.mesh.update(pos, Some(&self.scalar));
         self.lines.clear();
         if self.ui.show_fixed {
-            fixed_outline(&self.grid, pos, &self.latest.fixed, [0.2, 0.9, 0.3, 1.0], &mut self.lines);
+            fixed_outline(&self.edges, pos, &self.latest.fixed, [0.2, 0.9, 0.3, 1.0], &mut self.lines);
         }
         if self.ui.show_nodes {
             for p in pos {
@@ -809,15 +821,7 @@ impl App {
             }
         }
         if self.ui.show_springs {
-            for fam in crate::grid::axis_families() {
-                for (a, b) in self.grid.springs(fam) {
-                    if self.lines.len() + 2 > self.lines.capacity() {
-                        break;
-                    }
-                    self.lines.push(LineVertex { position: pos[a], colour: [0.9, 0.9, 0.9, 0.35] });
-                    self.lines.push(LineVertex { position: pos[b], colour: [0.9, 0.9, 0.9, 0.35] });
-                }
-            }
+            push_edges(&self.edges, pos, [0.9, 0.9, 0.9, 0.35], |_, _| true, &mut self.lines);
         }
     }
 
@@ -991,34 +995,13 @@ fn legend(ui: &mut egui::Ui, rect: egui::Rect, mode: ColourMode, range: &str) {
         ColourMode::Error => "MSM-FEM error",
         ColourMode::None => "",
     };
-    painter.text(
-        egui::pos2(x0 + 16.0, top - 22.0),
-        egui::Align2::RIGHT_BOTTOM,
-        title,
-        egui::FontId::proportional(13.0),
-        egui::Color32::WHITE,
-    );
-    painter.text(
-        egui::pos2(x0 - 6.0, top),
-        egui::Align2::RIGHT_TOP,
-        "max",
-        egui::FontId::proportional(12.0),
-        egui::Color32::WHITE,
-    );
-    painter.text(
-        egui::pos2(x0 - 6.0, bottom),
-        egui::Align2::RIGHT_BOTTOM,
-        "0",
-        egui::FontId::proportional(12.0),
-        egui::Color32::WHITE,
-    );
-    painter.text(
-        egui::pos2(x0 + 16.0, bottom + 6.0),
-        egui::Align2::RIGHT_TOP,
-        range,
-        egui::FontId::proportional(12.0),
-        egui::Color32::WHITE,
-    );
+    let label = |pos: egui::Pos2, align: egui::Align2, text: &str, size: f32| {
+        painter.text(pos, align, text, egui::FontId::proportional(size), egui::Color32::WHITE);
+    };
+    label(egui::pos2(x0 + 16.0, top - 22.0), egui::Align2::RIGHT_BOTTOM, title, 13.0);
+    label(egui::pos2(x0 - 6.0, top), egui::Align2::RIGHT_TOP, "max", 12.0);
+    label(egui::pos2(x0 - 6.0, bottom), egui::Align2::RIGHT_BOTTOM, "0", 12.0);
+    label(egui::pos2(x0 + 16.0, bottom + 6.0), egui::Align2::RIGHT_TOP, range, 12.0);
 }
 
 /// The shader's colour ramp, for the legend (same stops as `surface.wgsl`).

@@ -62,6 +62,18 @@ fn unreacted(case: &LoadCase, displacements: Vec<[f64; 3]>) -> CaseSolution {
     }
 }
 
+/// The tangent pattern kept in `slot` for `case`'s reduction, built on first use.
+fn tangent_for<'w>(
+    slot: &'w mut Option<TangentAssembler>,
+    model: &MsmModel,
+    case: &LoadCase,
+) -> Result<&'w mut TangentAssembler, CostError> {
+    match slot {
+        Some(t) => Ok(t),
+        empty => Ok(empty.insert(TangentAssembler::new(model, case_dofs(&model.grid, case))?)),
+    }
+}
+
 /// Per-thread buffers of the shear model's solves: one tangent pattern per loaded axis, for the
 /// static and for the transient cost.
 #[derive(Debug, Default)]
@@ -119,10 +131,7 @@ impl Problem {
         let mut out: Vec<CaseSolution> = Vec::with_capacity(self.cases.len());
         for case in &self.cases {
             let a = case.axis - 1;
-            let tangent = match &mut ws.transient[a] {
-                Some(t) => t,
-                slot => slot.insert(TangentAssembler::new(&model, case_dofs(&self.grid, case))?),
-            };
+            let tangent = tangent_for(&mut ws.transient[a], &model, case)?;
             let prepared = out.last().is_some_and(|prev| prev.axis == case.axis);
             out.push(unreacted(case, super::transient::transient_displacements(&model, case, tangent, prepared)?));
         }
@@ -149,10 +158,7 @@ impl Problem {
                 Some(u) => u,
                 None => {
                     let a = case.axis - 1;
-                    let tangent = match &mut ws.tangents[a] {
-                        Some(t) => t,
-                        slot => slot.insert(TangentAssembler::new(&model, case_dofs(&self.grid, case))?),
-                    };
+                    let tangent = tangent_for(&mut ws.tangents[a], &model, case)?;
                     let first_of_axis = out.last().is_none_or(|prev| prev.axis != case.axis);
                     if first_of_axis {
                         tangent.system.invalidate(); // factorised for other parameters

@@ -9,16 +9,39 @@ pub mod offscreen;
 use crate::grid::Grid;
 use gpu::LineVertex;
 
-/// Line segments outlining the nodes marked `fixed` (each grid edge between two fixed nodes).
-pub fn fixed_outline(grid: &Grid, x: &[[f32; 3]], fixed: &[bool], colour: [f32; 4], out: &mut Vec<LineVertex>) {
-    for fam in crate::grid::axis_families() {
-        for (a, b) in grid.springs(fam) {
-            if fixed[a] && fixed[b] {
-                out.push(LineVertex { position: x[a], colour });
-                out.push(LineVertex { position: x[b], colour });
-            }
+/// The grid's edges (pairs of lattice neighbours), for line overlays; build once per grid.
+pub fn lattice_edges(grid: &Grid) -> Vec<(usize, usize)> {
+    crate::grid::axis_families().iter().flat_map(|f| grid.springs(*f)).collect()
+}
+
+/// Appends the `edges` for which `keep(a, b)` holds as line segments, while `out` has capacity.
+pub fn push_edges(
+    edges: &[(usize, usize)],
+    x: &[[f32; 3]],
+    colour: [f32; 4],
+    keep: impl Fn(usize, usize) -> bool,
+    out: &mut Vec<LineVertex>,
+) {
+    for &(a, b) in edges {
+        if out.len() + 2 > out.capacity() {
+            break;
+        }
+        if keep(a, b) {
+            out.push(LineVertex { position: x[a], colour });
+            out.push(LineVertex { position: x[b], colour });
         }
     }
+}
+
+/// Line segments outlining the nodes marked `fixed` (each edge between two fixed nodes).
+pub fn fixed_outline(
+    edges: &[(usize, usize)],
+    x: &[[f32; 3]],
+    fixed: &[bool],
+    colour: [f32; 4],
+    out: &mut Vec<LineVertex>,
+) {
+    push_edges(edges, x, colour, |a, b| fixed[a] && fixed[b], out);
 }
 
 /// Normalises `values` to [0, 1] by `max` (or their own maximum when `max` is `None`); returns the
