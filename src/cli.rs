@@ -60,7 +60,7 @@ pub enum Command {
         #[command(flatten)]
         params: ParamArgs,
         /// Read the parameters (and the object, unless given) from a calibration result JSON.
-        #[arg(long = "params", value_name = "FILE.json", conflicts_with_all = ["k1", "k2", "k3", "d", "c12", "c13", "c23"])]
+        #[arg(long = "params", value_name = "FILE.json", conflicts_with_all = ["k1", "k2", "k3", "d", "c12", "c13", "c23", "b"])]
         params_file: Option<PathBuf>,
         #[command(flatten)]
         grid: GridArgs,
@@ -93,7 +93,7 @@ pub enum Command {
         /// Cost: static equilibria (the paper's).
         #[arg(long, value_enum, default_value = "static")]
         cost: CostMode,
-        /// MSM topology: the paper's axis springs, or axis + face-diagonal (shear) springs.
+        /// MSM topology: the paper's axis springs, axis + face-diagonal (shear) springs, or the hex-element lattice.
         #[arg(long, value_enum, default_value = "axis")]
         model: Topology,
         /// Override a gene's search bounds, e.g. `--bound k1=100:5000` (repeatable).
@@ -113,7 +113,7 @@ pub enum Command {
         /// Seeds per method and object.
         #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..=1000))]
         seeds: u64,
-        /// Skip the shear-spring model's calibration (about 25 s per object).
+        /// Skip the richer lattices' calibrations (shear and hex, about 55 s per object).
         #[arg(long)]
         no_shear: bool,
     },
@@ -135,7 +135,7 @@ pub enum Command {
         /// Colour map: none, displacement magnitude, or MSM-vs-FEM error.
         #[arg(long, value_enum, default_value = "displacement")]
         colour: crate::scene::ColourMode,
-        /// MSM: the calibrated shear-spring tissue (default) or the paper's axis springs.
+        /// MSM: the calibrated shear-spring tissue (default), the hex-element lattice or the paper's axis springs.
         #[arg(long, value_enum, default_value = "shear")]
         model: Topology,
         /// Displacement magnification of the drawn shape.
@@ -212,6 +212,9 @@ pub struct ParamArgs {
     /// Face-diagonal stiffness, 2-3 plane, N/m (shear model).
     #[arg(long, allow_negative_numbers = true)]
     pub c23: Option<f64>,
+    /// Body-diagonal stiffness, N/m (hex model, which also needs the c's).
+    #[arg(long, allow_negative_numbers = true)]
+    pub b: Option<f64>,
 }
 
 impl ObjectArgs {
@@ -260,6 +263,12 @@ impl ParamArgs {
                 (None, false) => bail!("the shear model needs --c13 (object {} is orthotropic)", material.name),
             };
             (p.c12, p.c13, p.c23) = (Some(c12), Some(c13), Some(c23));
+        }
+        if let Some(b) = self.b {
+            if p.c12.is_none() {
+                bail!("the hex model (--b) also needs --c12, --c13 and --c23");
+            }
+            p.b = Some(b);
         }
         p.validate()?;
         Ok(p)

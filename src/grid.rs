@@ -74,7 +74,29 @@ pub fn face_diagonal_families() -> [[SpringFamily; 2]; 3] {
     ]
 }
 
+/// The four body-diagonal families (the diagonals of every lattice cube).
+pub fn body_diagonal_families() -> [SpringFamily; 4] {
+    [[1, 1, 1], [1, 1, -1], [1, -1, 1], [-1, 1, 1]].map(SpringFamily::new)
+}
+
 impl Grid {
+    /// The fraction of the elements around a spring of family `fam` starting at `node` that
+    /// exist in the grid: an element-assembled lattice gives the spring this share of an
+    /// interior spring's stiffness. A spring along a lattice axis has up to 4 elements around it,
+    /// a face diagonal up to 2, a body diagonal 1: along each axis the spring does not move in,
+    /// an element may lie on either side, unless the spring is on the boundary.
+    pub fn element_share(&self, fam: SpringFamily, node: usize) -> f64 {
+        let ijk = self.ijk(node);
+        let mut share = 1.0;
+        for a in 0..3 {
+            if fam.offset[a] == 0 {
+                let sides = usize::from(ijk[a] > 0) + usize::from(ijk[a] + 1 < self.n);
+                share *= sides as f64 / 2.0;
+            }
+        }
+        share
+    }
+
     /// A grid with `n` nodes per axis.
     pub fn new(n: usize) -> Result<Self, GridError> {
         if n < 2 {
@@ -237,6 +259,19 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn element_shares() {
+        let g = Grid::new(4).unwrap();
+        let x = SpringFamily::new([1, 0, 0]);
+        assert_eq!(g.element_share(x, g.node(1, 1, 1)), 1.0);
+        assert_eq!(g.element_share(x, g.node(1, 0, 1)), 0.5);
+        assert_eq!(g.element_share(x, g.node(1, 0, 3)), 0.25);
+        let xy = SpringFamily::new([1, 1, 0]);
+        assert_eq!(g.element_share(xy, g.node(0, 0, 1)), 1.0);
+        assert_eq!(g.element_share(xy, g.node(0, 0, 0)), 0.5);
+        assert_eq!(g.element_share(body_diagonal_families()[0], g.node(0, 0, 0)), 1.0);
+    }
 
     #[test]
     fn spec_node_numbering() {

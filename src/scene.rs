@@ -27,7 +27,7 @@ pub enum ColourMode {
 }
 
 /// The calibrated tissue parameters shipped in `assets/` for object `A` or `B`: the shear-spring
-/// model (the viewer's default) or the paper's axis-spring model, both calibrated by this program
+/// model (the viewer's default), the hex-element model or the paper's axis-spring model, all calibrated by this program
 /// (hybrid GA+SA, seed 1, static cost; see each file's `note`).
 pub fn tissue_params(material: &Material, topology: Topology) -> anyhow::Result<MsmParams> {
     let is_preset = Material::preset(&material.name)
@@ -43,6 +43,8 @@ pub fn tissue_params(material: &Material, topology: Topology) -> anyhow::Result<
         ("B", Topology::Shear) => include_str!("../assets/tissue_B_shear.json"),
         ("A", Topology::Axis) => include_str!("../assets/tissue_A_axis.json"),
         ("B", Topology::Axis) => include_str!("../assets/tissue_B_axis.json"),
+        ("A", Topology::Hex) => include_str!("../assets/tissue_A_hex.json"),
+        ("B", Topology::Hex) => include_str!("../assets/tissue_B_hex.json"),
         (other, _) => anyhow::bail!("no calibrated tissue is shipped for object {other:?}; calibrate one"),
     };
     #[derive(serde::Deserialize)]

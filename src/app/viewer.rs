@@ -422,6 +422,7 @@ impl App {
             }
             ui.horizontal(|ui| {
                 reload |= ui.selectable_value(&mut self.ui.topology, Topology::Shear, "shear springs (default)").changed();
+                reload |= ui.selectable_value(&mut self.ui.topology, Topology::Hex, "hex lattice").changed();
                 reload |= ui.selectable_value(&mut self.ui.topology, Topology::Axis, "paper: axis springs").changed();
             });
             if self.ui.topology == Topology::Axis {
@@ -448,7 +449,7 @@ impl App {
                 if !ti {
                     row(ui, "k3", &mut p.k3, " N/m");
                 }
-                for (name, c) in [("c12", &mut p.c12), ("c13", &mut p.c13), ("c23", &mut p.c23)] {
+                for (name, c) in [("c12", &mut p.c12), ("c13", &mut p.c13), ("c23", &mut p.c23), ("b", &mut p.b)] {
                     if let Some(v) = c
                         && !(ti && name == "c13")
                     {

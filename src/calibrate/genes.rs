@@ -3,6 +3,7 @@
 //! Genes follow the paper: `(k1, k2, k3, d)` for an orthotropic object and `(k1, k2, d)` for a
 //! transversely isotropic one (`k3 = k2`); the shear model inserts one diagonal stiffness per plane
 //! before `d`: `c12, c13, c23` (orthotropic) or `c12, c23` (transversely isotropic, `c13 = c12`).
+//! The hex model adds the body-diagonal stiffness `b` after them.
 //!
 //! Default bounds come from the material and the grid. A chain of springs along axis `a` under
 //! uniaxial stress `sigma` carries `sigma L^2 / n^2` and stretches `h sigma / E_a` per spring, so
@@ -21,7 +22,7 @@ use crate::msm::{MsmParams, Topology};
 /// Names and bounds of the genes of one calibration.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GeneSpace {
-    /// Gene names, in chromosome order (`k1`, `k2`, [`k3`], [`c12`, [`c13`], `c23`], `d`).
+    /// Gene names, in chromosome order (`k1`, `k2`, [`k3`], [`c12`, [`c13`], `c23`, [`b`]], `d`).
     pub names: Vec<String>,
     /// Lower bounds.
     pub lo: Vec<f64>,
@@ -57,14 +58,22 @@ impl GeneSpace {
             hi.push(h);
         };
         let axes: &[usize] = if ti { &[0, 1] } else { &[0, 1, 2] };
+        // In the hex model the diagonals carry part of the axial load, so its axis springs can be
+        // far softer than the chain scale.
+        let k_lo = if topology == Topology::Hex { 100.0 } else { 2.0 };
         for &a in axes {
-            push(["k1", "k2", "k3"][a], k_star[a] / 2.0, k_star[a] * 2.0);
+            push(["k1", "k2", "k3"][a], k_star[a] / k_lo, k_star[a] * 2.0);
         }
-        if topology == Topology::Shear {
+        if topology != Topology::Axis {
             let planes: &[usize] = if ti { &[0, 2] } else { &[0, 1, 2] };
             for &p in planes {
                 push(["c12", "c13", "c23"][p], c_star[p] / 100.0, c_star[p] * 2.0);
             }
+        }
+        if topology == Topology::Hex {
+            let lo = k_star.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = k_star.iter().copied().fold(0.0, f64::max);
+            push("b", lo / 100.0, 2.0 * hi);
         }
         push("d", 0.0, 10.0 * d_crit);
         Self { names, lo, hi, transversely_isotropic: ti }
@@ -113,6 +122,7 @@ impl GeneSpace {
             p.c13 = Some(get("c13").unwrap_or(c12));
             p.c23 = get("c23");
         }
+        p.b = get("b");
         p
     }
 }

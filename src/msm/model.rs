@@ -1,6 +1,6 @@
 //! The mass-spring model: parameters, spring families and masses.
 
-use crate::grid::{Grid, SpringFamily, axis_families, face_diagonal_families};
+use crate::grid::{Grid, SpringFamily, axis_families, body_diagonal_families, face_diagonal_families};
 
 /// Errors in MSM parameters.
 #[derive(Debug, thiserror::Error)]
@@ -25,6 +25,23 @@ pub enum Topology {
     Axis,
     /// Axis springs plus both diagonals of every lattice square, one stiffness per plane.
     Shear,
+    /// The springs of every hex element: its 12 edges, 12 face diagonals and 4 body diagonals,
+    /// one stiffness per family group (`k1..k3`, `c12..c23`, `b`). A spring shared by several
+    /// elements gets each element's share, so springs on the surface are softer than inside
+    /// (an edge spring on a face has half, on a cube edge a quarter of an interior one's
+    /// stiffness). Calibrated, it is the most accurate lattice here: see the `reproduce` report.
+    Hex,
+}
+
+impl Topology {
+    /// The lower-case name used on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Topology::Axis => "axis",
+            Topology::Shear => "shear",
+            Topology::Hex => "hex",
+        }
+    }
 }
 
 /// MSM parameters: spring stiffness per family (N/m) and nodal damping (N s/m).
@@ -47,17 +64,27 @@ pub struct MsmParams {
     /// Face-diagonal stiffness in the 2-3 plane (shear topology), N/m.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub c23: Option<f64>,
+    /// Body-diagonal stiffness (hex topology, which also needs `c12..c23`), N/m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub b: Option<f64>,
 }
 
 impl MsmParams {
     /// The paper's axis-spring parameters.
     pub fn axis(k1: f64, k2: f64, k3: f64, d: f64) -> Self {
-        Self { k1, k2, k3, d, c12: None, c13: None, c23: None }
+        Self { k1, k2, k3, d, c12: None, c13: None, c23: None, b: None }
     }
 
-    /// The topology these parameters describe: shear when any diagonal stiffness is set.
+    /// The topology these parameters describe: hex when a body-diagonal stiffness is set, shear
+    /// when any face-diagonal stiffness is, axis otherwise.
     pub fn topology(&self) -> Topology {
-        if self.c12.is_some() || self.c13.is_some() || self.c23.is_some() { Topology::Shear } else { Topology::Axis }
+        if self.b.is_some() {
+            Topology::Hex
+        } else if self.c12.is_some() || self.c13.is_some() || self.c23.is_some() {
+            Topology::Shear
+        } else {
+            Topology::Axis
+        }
     }
 
     /// Checks ranges: axis stiffness positive, diagonal stiffness and damping non-negative, all finite.
@@ -71,12 +98,17 @@ impl MsmParams {
         if !self.d.is_finite() || self.d < 0.0 {
             return bad("d", self.d, "damping must be a non-negative finite number (N s/m)");
         }
-        for (name, v) in [("c12", self.c12), ("c13", self.c13), ("c23", self.c23)] {
+        for (name, v) in [("c12", self.c12), ("c13", self.c13), ("c23", self.c23), ("b", self.b)] {
             if let Some(v) = v
                 && (!v.is_finite() || v < 0.0)
             {
                 return bad(name, v, "a diagonal stiffness must be a non-negative finite number (N/m)");
             }
+        }
+        if let Some(b) = self.b
+            && (self.c12.is_none() || self.c13.is_none() || self.c23.is_none())
+        {
+            return bad("b", b, "the hex topology (body diagonals) also needs c12, c13 and c23");
         }
         Ok(())
     }
@@ -141,6 +173,10 @@ impl MsmModel {
                 stiff.extend(diag[plane].iter().map(|f| (*f, c)));
             }
         }
+        let hex = params.topology() == Topology::Hex;
+        if let Some(b) = params.b {
+            stiff.extend(body_diagonal_families().into_iter().map(|f| (f, b)));
+        }
         let families = stiff
             .into_iter()
             .map(|(family, k)| {
@@ -149,7 +185,15 @@ impl MsmModel {
                     family,
                     offset: grid.linear_offset(family),
                     lo,
-                    stiffness: valid.iter().map(|&v| if v { k } else { 0.0 }).collect(),
+                    stiffness: valid
+                        .iter()
+                        .enumerate()
+                        .map(|(p, &v)| match (v, hex) {
+                            (false, _) => 0.0,
+                            (true, false) => k,
+                            (true, true) => k * grid.element_share(family, lo + p),
+                        })
+                        .collect(),
                     valid,
                     rest_length: family.length_in_h() * grid.h(),
                 }
