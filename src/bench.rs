@@ -19,6 +19,11 @@ pub struct BenchReport {
     pub msm_shear_explicit_step_s: BTreeMap<usize, f64>,
     /// One linearised implicit Euler step (assembly + factorisation + solve), keyed by nodes per axis.
     pub msm_implicit_step_s: BTreeMap<usize, f64>,
+    /// One prefactored implicit Euler step (force pass + one solve with the rest tangent factorised
+    /// once), paper's model, keyed by nodes per axis.
+    pub msm_prefactored_step_s: BTreeMap<usize, f64>,
+    /// The same for the hex-element lattice (object A's shipped tissue).
+    pub msm_hex_prefactored_step_s: BTreeMap<usize, f64>,
     /// FEM: assembly, one factorisation per fixed face, 9 solves (object A, 8^3).
     pub fem_static_9_cases_s: f64,
     /// Static MSM equilibrium of the 9 clamped cases, paper's model (closed form).
@@ -30,7 +35,7 @@ pub struct BenchReport {
 }
 
 /// Median time per call of `f`, from batches of at least ~20 ms over about `budget_s` seconds.
-fn time_per_call(budget_s: f64, mut f: impl FnMut()) -> f64 {
+pub fn time_per_call(budget_s: f64, mut f: impl FnMut()) -> f64 {
     f();
     let t = Instant::now();
     f();
@@ -68,15 +73,17 @@ fn explicit_step(n: usize, params: MsmParams) -> anyhow::Result<f64> {
     Ok(time_per_call(0.5, || dynamics.step_symplectic(&model, dt)))
 }
 
-fn implicit_step(n: usize) -> anyhow::Result<f64> {
+fn implicit_step(n: usize, params: MsmParams, prefactored: bool) -> anyhow::Result<f64> {
     let grid = Grid::new(n)?;
-    let model = MsmModel::new(grid, paper_params(), crate::material::TISSUE_DENSITY)?;
+    let model = MsmModel::new(grid, params, crate::material::TISSUE_DENSITY)?;
     let mut dynamics = Dynamics::new(&model);
     dynamics.apply_case(&LoadCase::clamped(&grid, "A", 1, 1.0));
-    dynamics.step_implicit(&model, 1e-3)?;
+    let step =
+        |d: &mut Dynamics| if prefactored { d.step_prefactored(&model, 1e-3) } else { d.step_implicit(&model, 1e-3) };
+    step(&mut dynamics)?;
     let mut result = Ok(());
     let t = time_per_call(0.5, || {
-        if let Err(e) = dynamics.step_implicit(&model, 1e-3) {
+        if let Err(e) = step(&mut dynamics) {
             result = Err(e);
         }
     });
@@ -94,7 +101,16 @@ pub fn run() -> anyhow::Result<BenchReport> {
     }
     let mut msm_implicit_step_s = BTreeMap::new();
     for n in [8, 16] {
-        msm_implicit_step_s.insert(n, implicit_step(n)?);
+        msm_implicit_step_s.insert(n, implicit_step(n, paper_params(), false)?);
+    }
+    let hex = crate::scene::tissue_params(&Material::object_a(), crate::msm::Topology::Hex)?;
+    let mut msm_prefactored_step_s = BTreeMap::new();
+    let mut msm_hex_prefactored_step_s = BTreeMap::new();
+    for n in [8, 16, 32] {
+        msm_prefactored_step_s.insert(n, implicit_step(n, paper_params(), true)?);
+    }
+    for n in [8, 16] {
+        msm_hex_prefactored_step_s.insert(n, implicit_step(n, hex, true)?);
     }
     let grid = Grid::paper();
     let material = Material::object_a();
@@ -128,6 +144,8 @@ pub fn run() -> anyhow::Result<BenchReport> {
         msm_explicit_step_s,
         msm_shear_explicit_step_s,
         msm_implicit_step_s,
+        msm_prefactored_step_s,
+        msm_hex_prefactored_step_s,
         fem_static_9_cases_s,
         msm_static_9_cases_s,
         msm_static_9_cases_newton_s,
@@ -144,6 +162,8 @@ impl BenchReport {
             ("MSM explicit step, axis springs", &self.msm_explicit_step_s),
             ("MSM explicit step, shear springs", &self.msm_shear_explicit_step_s),
             ("MSM implicit step, axis springs", &self.msm_implicit_step_s),
+            ("MSM prefactored implicit step, axis", &self.msm_prefactored_step_s),
+            ("MSM prefactored implicit step, hex", &self.msm_hex_prefactored_step_s),
         ] {
             for (n, t) in map {
                 s += &format!("{name:<40} n={n:>3}: {}\n", us(*t));

@@ -117,6 +117,41 @@ pub enum Command {
         #[arg(long)]
         no_shear: bool,
     },
+    /// Speed against accuracy: every model x resolution x integrator (chart.csv, chart.svg with the
+    /// Pareto front) and the explicit stability study (stability.csv, stability.svg), with chart.md, in DIR.
+    Chart {
+        /// Output directory (created if missing).
+        #[arg(long)]
+        out: PathBuf,
+        /// Objects to chart.
+        #[arg(long, value_delimiter = ',', default_value = "A,B")]
+        objects: Vec<String>,
+        /// Resolutions, nodes per axis (2..=32).
+        #[arg(long, value_delimiter = ',', default_value = "4,8,16,32")]
+        resolutions: Vec<usize>,
+        /// Skip the stability study (about 40 s).
+        #[arg(long)]
+        no_stability: bool,
+    },
+    /// The smallest sufficient model: the cheapest model, resolution and integrator that meets an
+    /// error budget at a step rate, explained from the chart's data.
+    Choose {
+        /// Error budget, percent of the paper's h (L/7), against the fine FEM.
+        #[arg(long = "max-error", value_name = "PCT")]
+        max_error: f64,
+        /// Real-time step rate the model must keep up with, Hz (1 kHz: haptics).
+        #[arg(long, default_value_t = 1000.0)]
+        rate: f64,
+        /// Object.
+        #[arg(long, default_value = "A")]
+        object: String,
+        /// Which error the budget bounds.
+        #[arg(long, value_enum, default_value = "max")]
+        metric: crate::study::choose::Metric,
+        /// A chart.csv written by `tissue-sim chart` (otherwise the chart of this object is computed, about a minute).
+        #[arg(long, value_name = "FILE.csv")]
+        chart: Option<PathBuf>,
+    },
     /// Render the cube offscreen to a PNG through the viewer's renderer (any wgpu adapter,
     /// software Vulkan included).
     Render {
@@ -414,6 +449,37 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             println!("wrote {} ({}x{}, adapter: {} / {:?})", out.display(), width, height, png.adapter, png.backend);
             Ok(())
         }
+        Some(Command::Chart { out, objects, resolutions, no_stability }) => {
+            let opts = chart_options(objects, resolutions)?;
+            let points = crate::study::write_chart(&out, &opts, !no_stability, &mut |m| eprintln!("{m}"))?;
+            println!("wrote {} points and chart.md to {}", points.len(), out.display());
+            Ok(())
+        }
+        Some(Command::Choose { max_error, rate, object, metric, chart }) => {
+            if !(max_error.is_finite() && max_error > 0.0) {
+                bail!("--max-error must be a positive percentage, got {max_error}");
+            }
+            if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
+                bail!("--rate must be a positive rate in Hz (at most 1e7), got {rate}");
+            }
+            let object = object.to_ascii_uppercase();
+            let points = match chart {
+                Some(path) => crate::study::read_chart_csv(&path)?,
+                None => {
+                    let opts = chart_options(vec![object.clone()], vec![4, 8, 16, 32])?;
+                    crate::study::chart::compute(&opts, &mut |m| eprintln!("{m}"))?.0
+                }
+            };
+            if !points.iter().any(|p| p.object == object) {
+                bail!("the chart has no points for object {object}");
+            }
+            let choice = crate::study::choose::choose(&points, &object, max_error, rate, metric);
+            println!("{}", choice.explanation);
+            if choice.chosen.is_none() {
+                bail!("no model meets the budget");
+            }
+            Ok(())
+        }
         Some(Command::Bench { json }) => {
             let report = crate::bench::run()?;
             if json {
@@ -424,6 +490,24 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             Ok(())
         }
     }
+}
+
+fn chart_options(objects: Vec<String>, resolutions: Vec<usize>) -> anyhow::Result<crate::study::chart::ChartOptions> {
+    let objects: Vec<String> = objects.iter().map(|o| o.trim().to_ascii_uppercase()).collect();
+    for o in &objects {
+        if Material::preset(o).is_none() {
+            bail!("unknown object {o:?}: the chart covers the presets A and B");
+        }
+    }
+    if resolutions.is_empty() {
+        bail!("give at least one resolution");
+    }
+    for &n in &resolutions {
+        if !(2..=32).contains(&n) {
+            bail!("resolution {n} is out of range: nodes per axis must be in 2..=32 (the reference FEM is 40^3)");
+        }
+    }
+    Ok(crate::study::chart::ChartOptions { objects, resolutions, ..Default::default() })
 }
 
 fn errors(material: &Material, params: MsmParams, grid: Grid, json: bool) -> anyhow::Result<()> {

@@ -23,3 +23,4 @@ pub mod scene;
 pub mod script;
 pub mod sim;
 pub mod sparse;
+pub mod study;

@@ -14,6 +14,19 @@ pub enum Integrator {
     Symplectic,
     /// Linearised backward Euler: stable for any time step, one sparse factorisation per step.
     Implicit,
+    /// Linearised backward Euler with the rest tangent factorised once: one solve per step.
+    Prefactored,
+}
+
+impl Integrator {
+    /// The lower-case name used on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Symplectic => "symplectic",
+            Integrator::Implicit => "implicit",
+            Integrator::Prefactored => "prefactored",
+        }
+    }
 }
 
 /// A user tool acting on the tissue.
@@ -130,9 +143,9 @@ impl Simulation {
         Self::integrator_for(dt, Self::explicit_dt_limit(model))
     }
 
-    /// Symplectic when `dt` is at most half the explicit limit `limit`, implicit otherwise.
+    /// Symplectic when `dt` is at most half the explicit limit `limit`, prefactored implicit otherwise.
     pub fn integrator_for(dt: f64, limit: f64) -> Integrator {
-        if dt <= 0.5 * limit { Integrator::Symplectic } else { Integrator::Implicit }
+        if dt <= 0.5 * limit { Integrator::Symplectic } else { Integrator::Prefactored }
     }
 
     /// Replaces the parameters, keeping the state (a calibration result applied live).
@@ -176,6 +189,7 @@ impl Simulation {
                 Ok(())
             }
             Integrator::Implicit => self.dynamics.step_implicit(&self.model, self.dt),
+            Integrator::Prefactored => self.dynamics.step_prefactored(&self.model, self.dt),
         };
         self.enforce_contact();
         self.time_s += self.dt;

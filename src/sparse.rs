@@ -149,6 +149,12 @@ impl SpdSystem {
         self.l_values.len()
     }
 
+    /// Approximate bytes held: matrix pattern and values, factor values (the symbolic
+    /// factor's index arrays are counted as one index per factor entry).
+    pub fn memory_bytes(&self) -> usize {
+        self.values.len() * (8 + 4) + (self.n + 1) * 4 + self.l_values.len() * (8 + 4)
+    }
+
     /// Whether the current values are factorised.
     pub fn is_factored(&self) -> bool {
         self.factored

@@ -46,6 +46,7 @@ fn explicit_and_implicit_steps_do_not_allocate() {
     dynamics.apply_case(&LoadCase::clamped(&grid, "A", 1, 5.0));
     dynamics.step_symplectic(&model, 1e-5);
     dynamics.step_implicit(&model, 1e-3).expect("first implicit step builds the pattern");
+    dynamics.step_prefactored(&model, 1e-3).expect("first prefactored step builds the factor");
     let before = ALLOCATIONS.load(Ordering::Relaxed);
     for _ in 0..100 {
         dynamics.step_symplectic(&model, 1e-5);
@@ -55,5 +56,13 @@ fn explicit_and_implicit_steps_do_not_allocate() {
         dynamics.step_implicit(&model, 1e-3).expect("implicit step");
     }
     let implicit = ALLOCATIONS.load(Ordering::Relaxed) - before - explicit;
-    assert_eq!((explicit, implicit), (0, 0), "allocations in 100 explicit / 10 implicit steps");
+    for _ in 0..10 {
+        dynamics.step_prefactored(&model, 1e-3).expect("prefactored step");
+    }
+    let prefactored = ALLOCATIONS.load(Ordering::Relaxed) - before - explicit - implicit;
+    assert_eq!(
+        (explicit, implicit, prefactored),
+        (0, 0, 0),
+        "allocations in 100 explicit / 10 implicit / 10 prefactored steps"
+    );
 }

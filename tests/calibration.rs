@@ -155,7 +155,13 @@ fn shipped_hex_lattice_meets_the_richer_model_targets_at_10_newtons() {
         let paper = errors(&axis_problem, tissue_sim::msm::MsmParams::axis(k[0], k[1], k[2], 0.0));
         let rich = errors(&hex_problem, hex);
         for (p, r) in paper.iter().zip(&rich).filter(|(p, _)| p.force_n == 10.0) {
-            assert!(r.avg_pct <= p.avg_pct / 3.0, "{name} axis {}: avg {} vs paper model {}", p.axis, r.avg_pct, p.avg_pct);
+            assert!(
+                r.avg_pct <= p.avg_pct / 3.0,
+                "{name} axis {}: avg {} vs paper model {}",
+                p.axis,
+                r.avg_pct,
+                p.avg_pct
+            );
             assert!(
                 r.max_pct <= p.max_pct * 2.0 / 3.0,
                 "{name} axis {}: max {} vs paper model {}",

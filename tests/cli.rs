@@ -191,3 +191,39 @@ fn calibrate_writes_the_spec_result_deterministically() {
     let o = run(&["calibrate", "--object", "A", "--bound", "k9=1:2", "--out", a.to_str().expect("utf8")]);
     assert!(!o.status.success() && stderr(&o).contains("no gene"));
 }
+
+#[test]
+fn chart_then_choose_round_trip_and_bad_budgets() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("chart");
+    let out_s = out.to_str().expect("utf8");
+    let o = run(&["chart", "--out", out_s, "--objects", "A", "--resolutions", "4,6", "--no-stability"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("chart.csv")).expect("chart.csv");
+    // 5 models x 2 resolutions x 2 integrators, plus the header.
+    assert_eq!(csv.lines().count(), 21, "{csv}");
+    assert!(csv.lines().next().expect("header").contains("avg_err_pct"));
+    assert!(csv.contains(",true"), "a Pareto front is marked");
+    assert!(std::fs::read_to_string(out.join("chart.svg")).expect("svg").contains("<svg"));
+    let chart = out.join("chart.csv");
+    let chart_s = chart.to_str().expect("utf8");
+    let o = run(&["choose", "--chart", chart_s, "--max-error", "5", "--rate", "1000"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("Chosen:"), "{text}");
+    // An impossible budget: a clear message and a non-zero exit.
+    let o = run(&["choose", "--chart", chart_s, "--max-error", "0.00001"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("No model meets"));
+    for bad in [
+        vec!["choose", "--chart", chart_s, "--max-error", "-1"],
+        vec!["choose", "--chart", chart_s, "--max-error", "1", "--rate", "0"],
+        vec!["choose", "--chart", "/nonexistent/chart.csv", "--max-error", "1"],
+        vec!["chart", "--out", out_s, "--resolutions", "50"],
+        vec!["chart", "--out", out_s, "--objects", "C"],
+    ] {
+        let o = run(&bad);
+        assert!(!o.status.success(), "{bad:?} must fail");
+        assert!(stderr(&o).contains("error:"), "{bad:?}: {}", stderr(&o));
+    }
+}

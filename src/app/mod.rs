@@ -4,10 +4,11 @@
 
 pub mod calibration;
 pub mod physics;
+pub mod study_panel;
 pub mod viewer;
 
 /// The headless commands, named when there is no display.
-pub const HEADLESS_HINT: &str = "headless commands: render, simulate, fem, msm, errors, calibrate, reproduce, bench \
+pub const HEADLESS_HINT: &str = "headless commands: render, simulate, fem, msm, errors, calibrate, reproduce, chart, choose, bench \
                                  (tissue-sim --help)";
 
 /// True when an X11 or Wayland display is configured.

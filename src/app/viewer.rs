@@ -64,6 +64,7 @@ struct Ui {
     result: Option<MsmParams>,
     note: Option<String>,
     force_depth: Vec<[f64; 2]>,
+    study: super::study_panel::StudyPanel,
 }
 
 /// The mouse gesture in progress.
@@ -183,6 +184,7 @@ impl App {
                 result: None,
                 note: None,
                 force_depth: Vec::new(),
+                study: Default::default(),
             },
             camera: OrbitCamera::default(),
             gesture: Gesture::None,
@@ -479,7 +481,13 @@ impl App {
                 changed |=
                     ui.selectable_value(&mut self.ui.integrator, Integrator::Symplectic, "symplectic Euler").changed();
                 changed |=
-                    ui.selectable_value(&mut self.ui.integrator, Integrator::Implicit, "implicit Euler").changed();
+                    ui.selectable_value(&mut self.ui.integrator, Integrator::Prefactored, "implicit, prefactored")
+                        .on_hover_text("backward Euler with the rest tangent factorised once: one solve per step")
+                        .changed();
+                changed |= ui
+                    .selectable_value(&mut self.ui.integrator, Integrator::Implicit, "implicit, full tangent")
+                    .on_hover_text("backward Euler refactorising the current tangent every step")
+                    .changed();
             });
             let mut dt_ms = self.ui.dt * 1e3;
             if ui.add(egui::Slider::new(&mut dt_ms, 0.01..=5.0).logarithmic(true).text("dt (ms)")).changed() {
@@ -494,9 +502,9 @@ impl App {
             }
             // Never leave the explicit integrator running where it would be unstable.
             if changed && self.ui.integrator == Integrator::Symplectic && self.ui.dt > 0.9 * limit {
-                self.ui.integrator = Integrator::Implicit;
+                self.ui.integrator = Integrator::Prefactored;
                 self.ui.note = Some(format!(
-                    "dt = {:.3} ms is above 0.9 x the explicit limit ({:.3} ms): switched to implicit Euler",
+                    "dt = {:.3} ms is above 0.9 x the explicit limit ({:.3} ms): switched to prefactored implicit Euler",
                     self.ui.dt * 1e3,
                     limit * 1e3
                 ));
@@ -574,6 +582,11 @@ impl App {
             if ui.button("Reset camera").clicked() {
                 self.camera = OrbitCamera::default();
             }
+        });
+        egui::CollapsingHeader::new("Speed vs accuracy").default_open(false).show(ui, |ui| {
+            let ctx = self.egui.clone();
+            let object = if self.ui.object == "file" { self.ui.material.name.clone() } else { self.ui.object.clone() };
+            self.ui.study.ui(ui, &object, move || ctx.request_repaint());
         });
         egui::CollapsingHeader::new("Calibration (GA+SA)").default_open(true).show(ui, |ui| {
             ui.horizontal(|ui| {

@@ -7,6 +7,7 @@
 //! element-by-element residual so that answers sit at round-off.
 
 pub mod clamped;
+pub mod dynamics;
 pub mod element;
 
 use crate::cases::LoadCase;
@@ -46,6 +47,28 @@ pub struct CaseSolution {
 }
 
 impl FemModel {
+    /// The elements' node lists (spec node order).
+    pub fn elements(&self) -> &[[usize; 8]] {
+        &self.elements
+    }
+
+    /// The lower-triangle entries `(row, col)` of every element matrix over global dofs, with
+    /// their values (duplicates add up at assembly).
+    pub fn stiffness_entries(&self) -> (Vec<(usize, usize)>, Vec<f64>) {
+        let mut entries = Vec::with_capacity(self.elements.len() * 300);
+        let mut values = Vec::with_capacity(entries.capacity());
+        for nodes in &self.elements {
+            let dof = |l: usize| 3 * nodes[l / 3] + l % 3;
+            for a in 0..24 {
+                for b in 0..=a {
+                    entries.push((dof(a), dof(b)));
+                    values.push(self.ke[(a, b)]);
+                }
+            }
+        }
+        (entries, values)
+    }
+
     /// Builds the element matrix of `material` on `grid`.
     pub fn new(grid: Grid, material: &Material) -> Self {
         Self {
@@ -124,17 +147,7 @@ pub struct StaticSolver {
 impl StaticSolver {
     /// Assembles the full stiffness and analyses its pattern.
     pub fn new(model: &FemModel) -> Result<Self, SparseError> {
-        let mut entries = Vec::with_capacity(model.elements.len() * 300);
-        let mut values = Vec::with_capacity(entries.capacity());
-        for nodes in &model.elements {
-            let dof = |l: usize| 3 * nodes[l / 3] + l % 3;
-            for a in 0..24 {
-                for b in 0..=a {
-                    entries.push((dof(a), dof(b)));
-                    values.push(model.ke[(a, b)]);
-                }
-            }
-        }
+        let (entries, values) = model.stiffness_entries();
         let dofs = 3 * model.grid.num_nodes();
         let (mut system, slots) = SpdSystem::new(dofs, &entries)?;
         for (slot, v) in slots.iter().zip(values) {

@@ -1,5 +1,6 @@
-//! Time integration of the mass-spring model: symplectic (semi-implicit) Euler and linearised
-//! backward (implicit) Euler. Both steps allocate nothing once the state is built.
+//! Time integration of the mass-spring model: symplectic (semi-implicit) Euler, linearised
+//! backward (implicit) Euler with the tangent of every step, and the same with the rest tangent
+//! factorised once (prefactored). No step allocates once the state is built.
 
 use super::forces::{ForceScratch, TangentAssembler, add_spring_forces, dispatch_avx2, gather_forces, pair_forces};
 use super::model::MsmModel;
@@ -21,6 +22,7 @@ pub struct Dynamics {
     f: [Vec<f64>; 3],
     scratch: ForceScratch,
     implicit: Option<ImplicitWork>,
+    prefactored: Option<PrefactoredWork>,
     /// Linear offsets of the model's spring families (the topology the buffers are built for).
     family_offsets: Vec<usize>,
 }
@@ -30,6 +32,17 @@ struct ImplicitWork {
     tangent: TangentAssembler,
     kv: [Vec<f64>; 3],
     rhs: Vec<f64>,
+}
+
+/// The prefactored step's system `M + dt D + dt^2 K_0` (`K_0`: the rest tangent), factorised for
+/// the `dt` and parameters it was built with.
+#[derive(Debug)]
+struct PrefactoredWork {
+    tangent: TangentAssembler,
+    rhs: Vec<f64>,
+    rest: [Vec<f64>; 3],
+    /// The `dt` of the factor; NaN when it must be rebuilt (new parameters).
+    dt: f64,
 }
 
 impl Dynamics {
@@ -47,6 +60,7 @@ impl Dynamics {
             f: zeros(),
             scratch: ForceScratch::new(model),
             implicit: None,
+            prefactored: None,
             family_offsets: model.families.iter().map(|f| f.offset).collect(),
         }
     }
@@ -62,6 +76,7 @@ impl Dynamics {
             }
         }
         self.implicit = None;
+        self.prefactored = None;
     }
 
     /// Switches to another model on the same grid (new parameters, e.g. a calibration result, or
@@ -74,7 +89,11 @@ impl Dynamics {
             // pattern stays, stiffness is read at assembly.)
             self.scratch = ForceScratch::new(model);
             self.implicit = None;
+            self.prefactored = None;
             self.family_offsets = offsets;
+        }
+        if let Some(work) = self.prefactored.as_mut() {
+            work.dt = f64::NAN; // new stiffness: refactorise at the next step
         }
     }
 
@@ -132,6 +151,56 @@ impl Dynamics {
             }
         }
         Ok(())
+    }
+
+    /// One linearised backward Euler step with the rest tangent `K_0`, factorised once:
+    /// `(M + dt d I + dt^2 K_0) v' = M v + dt f(x)`, then `x += dt v'`. The spring forces `f(x)` are
+    /// the full nonlinear ones; only the Jacobian is frozen at rest, so the step is as accurate
+    /// as [`Dynamics::step_implicit`] for small strains and rotations and costs one force pass
+    /// and one pair of triangular solves. The factor is rebuilt when `dt`, the parameters or
+    /// the fixed nodes change; a step that reuses it allocates nothing.
+    pub fn step_prefactored(&mut self, model: &MsmModel, dt: f64) -> Result<(), SparseError> {
+        if self.prefactored.is_none() {
+            let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
+            let tangent = TangentAssembler::at_rest(model, DofMap::free(&fixed))?;
+            let rhs = vec![0.0; tangent.system.n()];
+            let g = model.grid;
+            let rest = std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect());
+            self.prefactored = Some(PrefactoredWork { tangent, rhs, rest, dt: f64::NAN });
+        }
+        self.forces(model);
+        let Some(work) = self.prefactored.as_mut() else { unreachable!("built above") };
+        let m = model.node_mass;
+        let d = model.params.d;
+        if work.dt != dt {
+            work.tangent.assemble(model, &work.rest, dt * dt, m + dt * d, false, None);
+            work.tangent.system.factor()?;
+            work.dt = dt;
+        }
+        for (p, &free) in self.free.iter().enumerate() {
+            if free != 0.0 {
+                for c in 0..3 {
+                    work.rhs[work.tangent.dofs.map[3 * p + c].0 as usize] = m * self.v[c][p] + dt * self.f[c][p];
+                }
+            }
+        }
+        work.tangent.system.solve_in_place(&mut work.rhs)?;
+        for (p, &free) in self.free.iter().enumerate() {
+            if free != 0.0 {
+                for c in 0..3 {
+                    self.v[c][p] = work.rhs[work.tangent.dofs.map[3 * p + c].0 as usize];
+                    self.x[c][p] += dt * self.v[c][p];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Bytes held by the prefactored step's factor and buffers (0 before its first step).
+    pub fn prefactored_memory_bytes(&self) -> usize {
+        self.prefactored
+            .as_ref()
+            .map_or(0, |w| w.tangent.system.memory_bytes() + (w.rhs.len() + 3 * w.rest[0].len()) * 8)
     }
 
     /// Kinetic energy, joules.

@@ -159,14 +159,28 @@ impl TangentAssembler {
     /// Builds the pattern of `P^T K P` for `model` over the reduced unknowns `dofs`. The pattern
     /// serves every model of the same grid and topology: stiffness is read at assembly.
     pub fn new(model: &MsmModel, dofs: DofMap) -> Result<Self, SparseError> {
+        Self::build(model, dofs, false)
+    }
+
+    /// Like [`TangentAssembler::new`], for the rest tangent only: the pattern keeps just the
+    /// entries `(r, c)` of a spring's block where its rest direction has both components non-zero
+    /// (`k n n^T` at rest). Axis springs then couple one component each, so the paper's lattice
+    /// splits into independent chains and its factor has almost no fill.
+    pub fn at_rest(model: &MsmModel, dofs: DofMap) -> Result<Self, SparseError> {
+        Self::build(model, dofs, true)
+    }
+
+    fn build(model: &MsmModel, dofs: DofMap, rest_only: bool) -> Result<Self, SparseError> {
         let springs = representative_springs(model, &dofs);
         let mut entries = Vec::new();
         let mut owners = Vec::new(); // (spring, local entry, factor)
         for (s, (sp, _)) in springs.iter().enumerate() {
             let mut local = 0;
+            let o = model.families[sp.family].family.offset;
             let mut push = |r: usize, c: usize, local: usize| {
                 let ((ri, rs), (ci, cs)) = (dofs.map[r], dofs.map[c]);
-                if ri != u32::MAX && ci != u32::MAX {
+                let structural = !rest_only || (o[r % 3] != 0 && o[c % 3] != 0);
+                if ri != u32::MAX && ci != u32::MAX && structural {
                     entries.push((ri as usize, ci as usize));
                     let twice = if r != c && ri == ci { 2.0 } else { 1.0 };
                     owners.push((s, local, rs * cs * twice));

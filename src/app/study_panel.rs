@@ -1,0 +1,183 @@
+//! The panel's speed-against-accuracy section: the chart (computed on a background thread or
+//! read from a `chart.csv`), its Pareto front, and the choice of the smallest sufficient model.
+
+use std::sync::mpsc::{Receiver, channel};
+
+use egui_plot::{Legend, Line, MarkerShape, Plot, PlotPoints, Points};
+
+use crate::study::chart::{ChartOptions, ChartPoint, ModelKind, compute};
+use crate::study::choose::{Choice, Metric, choose};
+
+const COLOURS: [egui::Color32; 5] = [
+    egui::Color32::from_rgb(31, 119, 180),
+    egui::Color32::from_rgb(255, 127, 14),
+    egui::Color32::from_rgb(44, 160, 44),
+    egui::Color32::from_rgb(214, 39, 40),
+    egui::Color32::from_rgb(148, 103, 189),
+];
+
+enum Message {
+    Progress(String),
+    Done(Result<Vec<ChartPoint>, String>),
+}
+
+/// State of the section.
+pub struct StudyPanel {
+    points: Vec<ChartPoint>,
+    rx: Option<Receiver<Message>>,
+    status: String,
+    csv_path: String,
+    max_error: f64,
+    rate: f64,
+    metric: Metric,
+    choice: Option<Choice>,
+}
+
+impl Default for StudyPanel {
+    fn default() -> Self {
+        Self {
+            points: Vec::new(),
+            rx: None,
+            status: String::new(),
+            csv_path: "chart/chart.csv".into(),
+            max_error: 1.5,
+            rate: 1000.0,
+            metric: Metric::Max,
+            choice: None,
+        }
+    }
+}
+
+impl StudyPanel {
+    /// Draws the section for `object`; `wake` repaints the UI from the worker thread.
+    pub fn ui(&mut self, ui: &mut egui::Ui, object: &str, wake: impl Fn() + Send + 'static) {
+        self.poll();
+        ui.horizontal(|ui| {
+            let busy = self.rx.is_some();
+            if ui
+                .add_enabled(!busy, egui::Button::new("Compute chart"))
+                .on_hover_text("every model at 4^3, 8^3 and 16^3 on a background thread (timings share the CPU with the physics thread)")
+                .clicked()
+            {
+                self.start(object, wake);
+            }
+            ui.text_edit_singleline(&mut self.csv_path);
+            if ui.add_enabled(!busy, egui::Button::new("Load CSV")).clicked() {
+                match crate::study::read_chart_csv(std::path::Path::new(self.csv_path.trim())) {
+                    Ok(p) => {
+                        self.status = format!("{} points from {}", p.len(), self.csv_path.trim());
+                        self.points = p;
+                        self.choice = None;
+                    }
+                    Err(e) => self.status = format!("{e:#}"),
+                }
+            }
+        });
+        if !self.status.is_empty() {
+            ui.label(&self.status);
+        }
+        let mine: Vec<&ChartPoint> = self.points.iter().filter(|p| p.object == object).collect();
+        if mine.is_empty() {
+            ui.label(format!("no chart for object {object} yet (or `tissue-sim chart --out chart`, then Load CSV)"));
+            return;
+        }
+        Plot::new("speed_accuracy")
+            .height(220.0)
+            .legend(Legend::default())
+            .x_axis_label("log10 time per step (s)")
+            .y_axis_label("log10 avg error (% of h)")
+            .show(ui, |plot| {
+                for (i, kind) in ModelKind::ALL.iter().enumerate() {
+                    let name = kind.name();
+                    for (integrator, shape) in [("explicit", MarkerShape::Circle), ("implicit", MarkerShape::Up)] {
+                        let pts: Vec<[f64; 2]> = mine
+                            .iter()
+                            .filter(|p| p.model == name && p.integrator == integrator)
+                            .map(|p| [p.step_s.log10(), p.avg_err_pct.log10()])
+                            .collect();
+                        plot.points(
+                            Points::new(format!("{name} {integrator}"), PlotPoints::from(pts))
+                                .shape(shape)
+                                .radius(4.0)
+                                .color(COLOURS[i % COLOURS.len()]),
+                        );
+                    }
+                }
+                let mut front: Vec<[f64; 2]> =
+                    mine.iter().filter(|p| p.pareto).map(|p| [p.step_s.log10(), p.avg_err_pct.log10()]).collect();
+                front.sort_by(|a, b| a[0].total_cmp(&b[0]));
+                plot.line(Line::new("Pareto front", PlotPoints::from(front)).color(egui::Color32::GRAY));
+            });
+        ui.horizontal(|ui| {
+            ui.label("error budget");
+            ui.add(egui::DragValue::new(&mut self.max_error).speed(0.01).range(0.001..=100.0).suffix(" % of h"));
+            ui.selectable_value(&mut self.metric, Metric::Max, "max");
+            ui.selectable_value(&mut self.metric, Metric::Avg, "avg");
+        });
+        ui.horizontal(|ui| {
+            ui.label("rate");
+            ui.add(egui::DragValue::new(&mut self.rate).speed(10.0).range(1.0..=100_000.0).suffix(" Hz"));
+            if ui.button("Choose").clicked() {
+                self.choice = Some(choose(&self.points, object, self.max_error, self.rate, self.metric));
+            }
+        });
+        if let Some(c) = &self.choice {
+            let summary = c.explanation.lines().last().unwrap_or_default();
+            ui.label(summary);
+            egui::CollapsingHeader::new("all candidates").show(ui, |ui| {
+                ui.label(egui::RichText::new(&c.explanation).monospace().size(9.0));
+            });
+        }
+    }
+
+    fn start(&mut self, object: &str, wake: impl Fn() + Send + 'static) {
+        let (tx, rx) = channel();
+        let opts = ChartOptions { objects: vec![object.to_owned()], resolutions: vec![4, 8, 16], timing_s: 0.05 };
+        let spawned = std::thread::Builder::new().name("chart".into()).spawn(move || {
+            let result = compute(&opts, &mut |m| {
+                let _ = tx.send(Message::Progress(m.to_owned()));
+                wake();
+            });
+            let _ = tx.send(Message::Done(result.map(|r| r.0).map_err(|e| format!("{e:#}"))));
+            wake();
+        });
+        match spawned {
+            Ok(_) => {
+                self.rx = Some(rx);
+                self.status = "computing the chart...".into();
+            }
+            Err(e) => self.status = format!("cannot start the chart thread: {e}"),
+        }
+    }
+
+    fn poll(&mut self) {
+        let Some(rx) = &self.rx else { return };
+        let mut finished = false;
+        loop {
+            match rx.try_recv() {
+                Ok(Message::Progress(m)) => self.status = m,
+                Ok(Message::Done(Ok(points))) => {
+                    self.status = format!("chart: {} points", points.len());
+                    self.points = points;
+                    self.choice = None;
+                    finished = true;
+                }
+                Ok(Message::Done(Err(e))) => {
+                    self.status = format!("chart failed: {e}");
+                    finished = true;
+                }
+                Err(std::sync::mpsc::TryRecvError::Empty) => break,
+                Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                    if !finished {
+                        self.status = "the chart thread stopped unexpectedly".into();
+                    }
+                    finished = true;
+                    break;
+                }
+            }
+        }
+        if finished {
+            self.rx = None;
+        }
+    }
+}

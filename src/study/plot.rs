@@ -1,0 +1,162 @@
+//! SVG charts of the study (plotters): error against time per step with the Pareto front, and
+//! the measured against the analytic critical time step.
+
+use plotters::prelude::*;
+
+use super::chart::ChartPoint;
+use super::stability::StabilityPoint;
+
+const COLOURS: [RGBColor; 5] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+];
+
+fn err(e: impl std::fmt::Display) -> anyhow::Error {
+    anyhow::anyhow!("plot: {e}")
+}
+
+fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (mut lo, mut hi) = (f64::MAX, f64::MIN_POSITIVE);
+    for v in values.filter(|v| v.is_finite() && *v > 0.0) {
+        (lo, hi) = (lo.min(v), hi.max(v));
+    }
+    if lo > hi {
+        (lo, hi) = (1e-6, 1.0);
+    }
+    (lo / 1.5)..(hi * 1.5)
+}
+
+/// Average error (log) against time per step (log), one panel per object: colour = model,
+/// circle = explicit, triangle = implicit, label = resolution, the Pareto front joined.
+pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[String]) -> anyhow::Result<String> {
+    let mut objects: Vec<&str> = points.iter().map(|p| p.object.as_str()).collect();
+    objects.dedup();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (620 * objects.len().max(1) as u32, 520)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let root = root
+            .titled(
+                "Speed against accuracy (circle: explicit, triangle: implicit; label: nodes per axis)",
+                ("sans-serif", 17),
+            )
+            .map_err(err)?;
+        let x_range = log_range(points.iter().map(|p| p.step_s));
+        let y_range = log_range(points.iter().map(|p| p.avg_err_pct));
+        for (area, object) in root.split_evenly((1, objects.len().max(1))).iter().zip(&objects) {
+            let mut chart = ChartBuilder::on(area)
+                .caption(format!("object {object}"), ("sans-serif", 16))
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(70)
+                .build_cartesian_2d(x_range.clone().log_scale(), y_range.clone().log_scale())
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc("time per step, s (one thread)")
+                .y_desc("average error vs fine FEM, % of h")
+                .x_label_formatter(&|v| format!("{v:.0e}"))
+                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .draw()
+                .map_err(err)?;
+            let mine: Vec<&ChartPoint> = points.iter().filter(|p| p.object == *object).collect();
+            let mut front: Vec<(f64, f64)> =
+                mine.iter().filter(|p| p.pareto).map(|p| (p.step_s, p.avg_err_pct)).collect();
+            front.sort_by(|a, b| a.0.total_cmp(&b.0));
+            chart
+                .draw_series(LineSeries::new(front, BLACK.stroke_width(1)))
+                .map_err(err)?
+                .label("Pareto front")
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(1)));
+            for (i, model) in models.iter().enumerate() {
+                let colour = COLOURS[i % COLOURS.len()];
+                let of_model: Vec<&&ChartPoint> = mine.iter().filter(|p| &p.model == model).collect();
+                chart
+                    .draw_series(of_model.iter().map(|p| {
+                        let at = (p.step_s, p.avg_err_pct);
+                        let style = if p.pareto { colour.filled() } else { colour.stroke_width(2) };
+                        let marker: DynElement<'_, SVGBackend<'_>, (f64, f64)> = if p.integrator == "explicit" {
+                            Circle::new(at, 5, style).into_dyn()
+                        } else {
+                            TriangleMarker::new(at, 6, style).into_dyn()
+                        };
+                        marker
+                    }))
+                    .map_err(err)?
+                    .label(model.as_str())
+                    .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
+                chart
+                    .draw_series(of_model.iter().filter(|p| p.integrator == "explicit").map(|p| {
+                        Text::new(format!("{}", p.n), (p.step_s, p.avg_err_pct), ("sans-serif", 11).into_font())
+                    }))
+                    .map_err(err)?;
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()
+                .map_err(err)?;
+        }
+        root.present().map_err(err)?;
+    }
+    Ok(svg)
+}
+
+/// Measured critical dt against `2 / omega_max`, log-log, with the line of equality.
+pub fn stability_svg(points: &[StabilityPoint]) -> anyhow::Result<String> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (640, 520)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let range = log_range(points.iter().flat_map(|p| [p.dt_analytic_s, p.dt_measured_s]));
+        let mut chart = ChartBuilder::on(&root)
+            .caption("Explicit critical time step: bisection vs 2 / omega_max", ("sans-serif", 17))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(range.clone().log_scale(), range.clone().log_scale())
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("2 / omega_max, s (power iteration on M^-1 K)")
+            .y_desc("measured dt_crit, s (bisection)")
+            .x_label_formatter(&|v| format!("{v:.0e}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(err)?;
+        chart
+            .draw_series(LineSeries::new([(range.start, range.start), (range.end, range.end)], BLACK.stroke_width(1)))
+            .map_err(err)?
+            .label("equal")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(1)));
+        let mut models: Vec<&str> = points.iter().map(|p| p.model.as_str()).collect();
+        models.dedup();
+        for (i, model) in models.iter().enumerate() {
+            let colour = COLOURS[i % COLOURS.len()];
+            chart
+                .draw_series(
+                    points
+                        .iter()
+                        .filter(|p| p.model == *model)
+                        .map(|p| Circle::new((p.dt_analytic_s, p.dt_measured_s), 5, colour.filled())),
+                )
+                .map_err(err)?
+                .label(*model)
+                .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(err)?;
+        root.present().map_err(err)?;
+    }
+    Ok(svg)
+}

@@ -1,0 +1,156 @@
+//! Where methods fail, pinned from both sides: explicit Euler just below and above its measured
+//! critical step, implicit Euler far beyond it, and linear against corotational FEM under a
+//! large rotation.
+
+use tissue_sim::cases::LoadCase;
+use tissue_sim::fem::FemModel;
+use tissue_sim::fem::dynamics::{FemDynamics, Formulation};
+use tissue_sim::grid::Grid;
+use tissue_sim::material::Material;
+use tissue_sim::msm::{Dynamics, MsmModel, Topology};
+use tissue_sim::scene::tissue_params;
+use tissue_sim::sim::{Integrator, Simulation};
+use tissue_sim::study::stability::{fem_point, msm_point, scaled_undamped};
+
+fn hex_model(grid: Grid, stiffness: f64) -> MsmModel {
+    let m = Material::object_a();
+    let p = tissue_params(&m, Topology::Hex).expect("shipped hex tissue");
+    MsmModel::new(grid, scaled_undamped(&p, stiffness), m.density).expect("model")
+}
+
+#[test]
+fn measured_critical_dt_is_within_5_percent_of_2_over_omega_max() {
+    let a = Material::object_a();
+    let axis = MsmModel::new(
+        Grid::paper(),
+        scaled_undamped(&tissue_params(&a, Topology::Axis).expect("axis tissue"), 1.0),
+        a.density,
+    )
+    .expect("model");
+    let points = [
+        msm_point("msm-axis", &axis, 1.0),
+        msm_point("msm-hex", &hex_model(Grid::paper(), 10.0), 10.0),
+        msm_point("msm-hex", &hex_model(Grid::new(5).expect("grid"), 1.0), 1.0),
+        fem_point(&a, Grid::new(4).expect("grid"), 1.0),
+    ];
+    for p in &points {
+        assert!(
+            (p.ratio - 1.0).abs() <= 0.05,
+            "{} n={} x{}: measured/analytic {}",
+            p.model,
+            p.n,
+            p.stiffness_scale,
+            p.ratio
+        );
+    }
+    // Stiffness x10 shortens the critical step by sqrt(10).
+    let base = msm_point("msm-hex", &hex_model(Grid::paper(), 1.0), 1.0);
+    let r = base.dt_measured_s / points[1].dt_measured_s;
+    assert!((r - 10f64.sqrt()).abs() < 1e-3 * r, "ratio {r}");
+}
+
+#[test]
+fn explicit_is_bounded_at_0_9_dt_crit_and_diverges_at_1_2_dt_crit_with_the_guard_reporting_it() {
+    let grid = Grid::paper();
+    let model = hex_model(grid, 1.0);
+    let dt_crit = msm_point("msm-hex", &model, 1.0).dt_measured_s;
+    let case = LoadCase::clamped(&grid, "A", 3, 10.0);
+    // Below: 20 000 undamped steps under a 10 N step load stay bounded (the motion oscillates
+    // about the equilibrium, at most about twice its displacement).
+    let mut sim = Simulation::new(model.clone(), Integrator::Symplectic, 0.9 * dt_crit, Some(&case));
+    let mut worst = 0.0f64;
+    for i in 0..20_000 {
+        sim.step().unwrap_or_else(|b| panic!("step {i} at 0.9 dt_crit blew up: {}", b.message));
+        worst = worst.max(sim.dynamics.displacements(&sim.model).iter().flatten().fold(0.0f64, |m, v| m.max(v.abs())));
+    }
+    assert!(worst < 5e-3, "largest displacement {worst} m at 0.9 dt_crit");
+    // Above: the guard catches the divergence, restores a good state and says why.
+    let mut sim = Simulation::new(model, Integrator::Symplectic, 1.2 * dt_crit, Some(&case));
+    let blow_up = (0..2000).find_map(|_| sim.step().err()).expect("1.2 dt_crit must diverge within 2000 steps");
+    assert!(blow_up.message.contains("stability limit"), "{}", blow_up.message);
+    assert!(sim.dynamics.x.iter().flatten().all(|v| v.is_finite()), "state restored");
+}
+
+#[test]
+fn implicit_at_60_hz_with_stiffness_x1000_stays_bounded_with_non_increasing_energy() {
+    let grid = Grid::paper();
+    let model = hex_model(grid, 1000.0);
+    for integrator in [Integrator::Prefactored, Integrator::Implicit] {
+        let mut d = Dynamics::new(&model);
+        let mut case = LoadCase::clamped(&grid, "A", 1, 0.0);
+        case.load.fill(0.0);
+        d.apply_case(&case);
+        for p in grid.face_nodes(0, true) {
+            d.x[0][p] += 1e-3;
+        }
+        let energy = |d: &Dynamics| d.kinetic_energy(&model) + model.elastic_energy(&d.x);
+        let e0 = energy(&d);
+        let mut last = e0;
+        for step in 0..600 {
+            match integrator {
+                Integrator::Prefactored => d.step_prefactored(&model, 1.0 / 60.0),
+                _ => d.step_implicit(&model, 1.0 / 60.0),
+            }
+            .expect("implicit step");
+            let e = energy(&d);
+            // Non-increasing, down to round-off (1e-15 of the initial energy).
+            assert!(e.is_finite() && e <= last + 1e-15 * e0, "{integrator:?} step {step}: energy {e} > {last}");
+            last = e;
+        }
+        assert!(last < 1e-6 * e0, "{integrator:?}: energy {last} of {e0} left after 10 s");
+    }
+}
+
+/// Largest relative change of any element edge length from rest.
+fn max_edge_strain(fem: &FemDynamics) -> f64 {
+    let g = fem.model.grid;
+    let mut worst = 0.0f64;
+    for nodes in fem.model.elements() {
+        for (a, b) in [(0, 1), (0, 3), (0, 4), (6, 7), (6, 5), (6, 2)] {
+            let (p, q) = (nodes[a], nodes[b]);
+            let l: f64 = (0..3).map(|c| (fem.x[3 * q + c] - fem.x[3 * p + c]).powi(2)).sum::<f64>().sqrt();
+            worst = worst.max((l / g.h() - 1.0).abs());
+        }
+    }
+    worst
+}
+
+#[test]
+fn linear_fem_fails_under_large_rotation_and_corotational_does_not() {
+    let m = Material::object_a();
+    let grid = Grid::new(4).expect("grid");
+    let omega = 10.0; // rad/s about z through the centre; a quarter turn in pi/20 s
+    let c = 0.05;
+    let mut strain = Vec::new();
+    for formulation in [Formulation::Linear, Formulation::Corotational] {
+        let mut fem = FemDynamics::new(FemModel::new(grid, &m), m.density, formulation, 0.0);
+        // A rigid quarter turn gives no force corotationally, a large one linearly.
+        let rest = fem.x.clone();
+        for p in 0..grid.num_nodes() {
+            let (x, y) = (rest[3 * p] - c, rest[3 * p + 1] - c);
+            fem.x[3 * p] = c - y;
+            fem.x[3 * p + 1] = c + x;
+        }
+        let force = fem.forces().iter().fold(0.0f64, |a, f| a.max(f.abs()));
+        match formulation {
+            Formulation::Corotational => assert!(force < 1e-9, "corotational force {force} N on a rigid rotation"),
+            Formulation::Linear => assert!(force > 10.0, "linear force {force} N on a rigid rotation"),
+        }
+        // Spin the free cube a quarter turn from rest.
+        fem.x.copy_from_slice(&rest);
+        for p in 0..grid.num_nodes() {
+            let (x, y) = (rest[3 * p] - c, rest[3 * p + 1] - c);
+            fem.v[3 * p] = -omega * y;
+            fem.v[3 * p + 1] = omega * x;
+        }
+        let dt = 2e-4;
+        let steps = (std::f64::consts::FRAC_PI_2 / omega / dt).round() as usize;
+        for _ in 0..steps {
+            fem.step_symplectic(dt);
+        }
+        strain.push(max_edge_strain(&fem));
+    }
+    // Corotational: only the centrifugal stretch (rho omega^2 r^2 / E, about 1e-3).
+    assert!(strain[1] < 5e-3, "corotational edge strain {}", strain[1]);
+    assert!(strain[0] > 0.1, "linear edge strain {} (expected a spurious swelling)", strain[0]);
+}
