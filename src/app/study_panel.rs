@@ -3,7 +3,7 @@
 
 use std::sync::mpsc::{Receiver, channel};
 
-use egui_plot::{Legend, Line, MarkerShape, Plot, PlotPoints, Points};
+use egui_plot::{Corner, Legend, MarkerShape, Plot, PlotPoints, Points};
 
 use crate::study::chart::{ChartOptions, ChartPoint, ModelKind, compute};
 use crate::study::choose::{Choice, Metric, choose};
@@ -61,7 +61,6 @@ impl StudyPanel {
             {
                 self.start(object, wake);
             }
-            ui.text_edit_singleline(&mut self.csv_path);
             if ui.add_enabled(!busy, egui::Button::new("Load CSV")).clicked() {
                 match crate::study::read_chart_csv(std::path::Path::new(self.csv_path.trim())) {
                     Ok(p) => {
@@ -73,18 +72,25 @@ impl StudyPanel {
                 }
             }
         });
+        ui.horizontal(|ui| {
+            ui.label("CSV");
+            ui.add(egui::TextEdit::singleline(&mut self.csv_path).desired_width(220.0));
+        });
         if !self.status.is_empty() {
             ui.label(&self.status);
         }
         let mine: Vec<&ChartPoint> = self.points.iter().filter(|p| p.object == object).collect();
         if mine.is_empty() {
-            ui.label(format!("no chart for object {object} yet (or `tissue-sim chart --out chart`, then Load CSV)"));
+            ui.label(format!("no chart for object {object} yet"));
             return;
         }
         Plot::new("speed_accuracy")
-            .height(220.0)
-            .legend(Legend::default())
-            .x_axis_label("log10 time per step (s)")
+            .height(240.0)
+            .allow_scroll(false)
+            .allow_zoom(false)
+            .allow_drag(false)
+            .legend(Legend::default().position(Corner::LeftBottom).background_alpha(0.6))
+            .x_axis_label("log10 time per step (s); circle explicit, triangle implicit")
             .y_axis_label("log10 avg error (% of h)")
             .show(ui, |plot| {
                 for (i, kind) in ModelKind::ALL.iter().enumerate() {
@@ -96,17 +102,25 @@ impl StudyPanel {
                             .map(|p| [p.step_s.log10(), p.avg_err_pct.log10()])
                             .collect();
                         plot.points(
-                            Points::new(format!("{name} {integrator}"), PlotPoints::from(pts))
+                            // One legend entry per model: circles explicit, triangles implicit.
+                            Points::new(name.clone(), PlotPoints::from(pts))
                                 .shape(shape)
                                 .radius(4.0)
                                 .color(COLOURS[i % COLOURS.len()]),
                         );
                     }
                 }
-                let mut front: Vec<[f64; 2]> =
+                // Rings around the Pareto points (a polyline's sharp corners render as spikes
+                // without feathering on software adapters).
+                let front: Vec<[f64; 2]> =
                     mine.iter().filter(|p| p.pareto).map(|p| [p.step_s.log10(), p.avg_err_pct.log10()]).collect();
-                front.sort_by(|a, b| a[0].total_cmp(&b[0]));
-                plot.line(Line::new("Pareto front", PlotPoints::from(front)).color(egui::Color32::GRAY));
+                plot.points(
+                    Points::new("Pareto front", PlotPoints::from(front))
+                        .shape(MarkerShape::Circle)
+                        .filled(false)
+                        .radius(7.0)
+                        .color(egui::Color32::LIGHT_GRAY),
+                );
             });
         ui.horizontal(|ui| {
             ui.label("error budget");

@@ -422,7 +422,7 @@ impl App {
                 });
                 reload &= !self.ui.material_path.trim().is_empty();
             }
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 reload |= ui.selectable_value(&mut self.ui.topology, Topology::Shear, "shear springs (default)").changed();
                 reload |= ui.selectable_value(&mut self.ui.topology, Topology::Hex, "hex lattice").changed();
                 reload |= ui.selectable_value(&mut self.ui.topology, Topology::Axis, "paper: axis springs").changed();
@@ -477,7 +477,7 @@ impl App {
         });
         egui::CollapsingHeader::new("Integrator").default_open(true).show(ui, |ui| {
             let mut changed = false;
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 changed |=
                     ui.selectable_value(&mut self.ui.integrator, Integrator::Symplectic, "symplectic Euler").changed();
                 changed |=

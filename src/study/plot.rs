@@ -96,7 +96,7 @@ pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[String]) -> anyhow::R
             }
             chart
                 .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
+                .position(SeriesLabelPosition::LowerLeft)
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
                 .draw()
