@@ -105,14 +105,80 @@ pub fn choose(points: &[ChartPoint], object: &str, max_error_pct: f64, rate_hz: 
             );
         }
         None => {
-            let best = mine.iter().map(|p| metric.of(p)).fold(f64::INFINITY, f64::min);
-            let _ = write!(
-                s,
-                "\nNo model meets both budgets. The most accurate point has {best:.4} % {} error; loosen the error \
-                 budget or lower the rate.",
-                metric.name()
-            );
+            let fast = mine
+                .iter()
+                .filter(|p| p.tick_s(rate_hz) <= budget_s)
+                .min_by(|a, b| metric.of(a).total_cmp(&metric.of(b)));
+            let accurate = mine.iter().find(|p| metric.of(p) <= max_error_pct);
+            let _ = write!(s, "\nNo model meets both budgets.");
+            if let Some(p) = fast {
+                let _ = write!(
+                    s,
+                    " At {rate_hz} Hz the most accurate is {} at {}^3 ({}): {:.4} % {} error.",
+                    p.model,
+                    p.n,
+                    p.integrator,
+                    metric.of(p),
+                    metric.name()
+                );
+            }
+            if let Some(p) = accurate {
+                let _ = write!(
+                    s,
+                    " Within {max_error_pct} % the cheapest is {} at {}^3 ({}): {:.1} us per tick against {:.1} us.",
+                    p.model,
+                    p.n,
+                    p.integrator,
+                    p.tick_s(rate_hz) * 1e6,
+                    budget_s * 1e6
+                );
+            }
+            let _ = write!(s, " Loosen the error budget or lower the rate.");
         }
     }
     Choice { chosen, explanation: s }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(model: &str, integrator: &str, step_s: f64, dt_max_s: f64, max_err_pct: f64) -> ChartPoint {
+        ChartPoint {
+            object: "A".into(),
+            model: model.into(),
+            n: 8,
+            integrator: integrator.into(),
+            step_s,
+            dt_max_s,
+            static_s: 0.0,
+            memory_bytes: 1000,
+            avg_err_pct: max_err_pct / 5.0,
+            max_err_pct,
+            pareto: false,
+        }
+    }
+
+    #[test]
+    fn picks_the_cheapest_tick_that_meets_both_budgets() {
+        let points = vec![
+            // 1 us per step but dt_max 0.1 ms: 12 substeps per 1 ms tick = 12 us.
+            point("cheap-stiff", "explicit", 1e-6, 1e-4, 1.0),
+            // 5 us per step, one step per tick.
+            point("implicit", "implicit", 5e-6, f64::INFINITY, 1.0),
+            // Cheapest of all but too inaccurate.
+            point("coarse", "explicit", 1e-7, 1e-2, 3.0),
+            // Accurate but too slow.
+            point("fine", "implicit", 2e-3, f64::INFINITY, 0.1),
+        ];
+        assert_eq!(points[0].substeps(1000.0), 12.0);
+        let c = choose(&points, "A", 2.0, 1000.0, Metric::Max);
+        assert_eq!(c.chosen.map(|p| p.model), Some("implicit".to_owned()), "{}", c.explanation);
+        let c = choose(&points, "A", 0.5, 1000.0, Metric::Max);
+        assert!(c.chosen.is_none());
+        assert!(c.explanation.contains("cheapest is fine"), "{}", c.explanation);
+        // At 10 Hz the fine model fits its tick.
+        let c = choose(&points, "A", 0.5, 10.0, Metric::Max);
+        assert_eq!(c.chosen.map(|p| p.model), Some("fine".to_owned()));
+    }
 }
