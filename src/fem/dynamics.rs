@@ -60,7 +60,8 @@ pub struct FemDynamics {
     u: Vec<f64>,
     /// Per element: the rotation of the last force evaluation (warm start of the next).
     rotations: Vec<Rotation3<f64>>,
-    implicit: Option<(SpdSystem, Vec<f64>, f64)>,
+    /// The factor, its right-hand side buffer, and the `(dt, alpha)` it was built for.
+    implicit: Option<(SpdSystem, Vec<f64>, (f64, f64))>,
 }
 
 impl FemDynamics {
@@ -178,7 +179,7 @@ impl FemDynamics {
     /// linear model; for the corotational one the forces are corotational and the Jacobian is
     /// the rest stiffness. The first step (or a new `dt`) factorises; later steps allocate nothing.
     pub fn step_prefactored(&mut self, dt: f64) -> Result<(), SparseError> {
-        let rebuild = self.implicit.as_ref().is_none_or(|(_, _, d)| *d != dt);
+        let rebuild = self.implicit.as_ref().is_none_or(|(_, _, key)| *key != (dt, self.alpha));
         if rebuild {
             let (entries, values) = self.model.stiffness_entries();
             let (mut system, slots) = SpdSystem::new(self.x.len(), &entries)?;
@@ -189,7 +190,7 @@ impl FemDynamics {
             let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
             system.decouple(&fixed, 1.0);
             system.factor()?;
-            self.implicit = Some((system, vec![0.0; self.x.len()], dt));
+            self.implicit = Some((system, vec![0.0; self.x.len()], (dt, self.alpha)));
         }
         self.compute_forces();
         let Some((system, rhs, _)) = self.implicit.as_mut() else { unreachable!("built above") };
@@ -216,7 +217,7 @@ impl FemDynamics {
 
     /// Bytes held by the state, the element data and the factor (if built).
     pub fn memory_bytes(&self) -> usize {
-        let vectors = 7 * self.x.len() * 8 + self.rotations.len() * 72 + self.model.elements().len() * 64 + 24 * 24 * 8;
+        let vectors = 8 * self.x.len() * 8 + self.rotations.len() * 72 + self.model.elements().len() * 64 + 24 * 24 * 8;
         vectors + self.factor_memory_bytes()
     }
 }

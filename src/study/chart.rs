@@ -80,7 +80,8 @@ pub struct ChartPoint {
     pub integrator: String,
     /// Wall time of one step, s.
     pub step_s: f64,
-    /// Largest stable explicit step (`2 / omega_max`, damping included), s; infinite for implicit.
+    /// Largest stable explicit step ([`damped_explicit_limit`] of `omega_max` and the damping rate), s;
+    /// infinite for implicit.
     pub dt_max_s: f64,
     /// Wall time of the static answer of one case, s.
     pub static_s: f64,
@@ -237,8 +238,7 @@ fn msm_points(
     let (avg, max) = errors(&sampled(&grid, &answers), reference);
     let fixed = cs[0].fixed_nodes();
     let omega = crate::study::stability::msm_omega_max(&model, &fixed, CHART_POWER_ITERATIONS);
-    let damping_limit = if params.d > 0.0 { 2.0 * model.node_mass / params.d } else { f64::INFINITY };
-    let dt_max = (2.0 / omega).min(damping_limit);
+    let dt_max = damped_explicit_limit(omega, params.d / model.node_mass);
     let mut dynamics = Dynamics::new(&model);
     dynamics.apply_case(&cs[0]);
     let explicit = time_per_call(opts.timing_s, || dynamics.step_symplectic(&model, 0.5 * dt_max));
@@ -302,8 +302,7 @@ fn fem_points(
     let (avg, max) = errors(&sampled(&grid, &answers), reference);
     fem.apply_case(&cs[0]);
     let omega = crate::study::stability::fem_omega_max(&fem, CHART_POWER_ITERATIONS);
-    let damping_limit = if alpha > 0.0 { 2.0 / alpha } else { f64::INFINITY };
-    let dt_max = (2.0 / omega).min(damping_limit);
+    let dt_max = damped_explicit_limit(omega, alpha);
     let explicit = time_per_call(opts.timing_s, || fem.step_symplectic(0.5 * dt_max));
     let without = fem.memory_bytes() - fem.factor_memory_bytes();
     let mut implicit = None;
@@ -374,6 +373,14 @@ fn corotational_static(
     anyhow::bail!("corotational static solve of {} did not converge", case.id)
 }
 
+/// The stability limit of symplectic Euler on a mode `omega` with damping rate `gamma` (1/s)
+/// treated explicitly: the one-step matrix has determinant `1 - h gamma` and trace
+/// `2 - h gamma - h^2 omega^2`, stable while `h^2 omega^2 + 2 h gamma < 4`, i.e.
+/// `h < 4 / (gamma + sqrt(gamma^2 + 4 omega^2))` (`2 / omega` undamped).
+pub fn damped_explicit_limit(omega: f64, gamma: f64) -> f64 {
+    4.0 / (gamma + (gamma * gamma + 4.0 * omega * omega).sqrt())
+}
+
 /// Marks the Pareto front of (step time, average error) per object.
 pub fn mark_pareto(points: &mut [ChartPoint]) {
     let snapshot = points.to_vec();
@@ -442,4 +449,29 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
     }
     mark_pareto(&mut points);
     Ok((points, notes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Symplectic Euler with explicit damping on one mode, `n` steps of `h` from `x = 1`.
+    fn grows(omega: f64, gamma: f64, h: f64) -> bool {
+        let (mut x, mut v) = (1.0f64, 0.0f64);
+        for _ in 0..20_000 {
+            v += h * (-omega * omega * x - gamma * v);
+            x += h * v;
+        }
+        !(x.abs() <= 1e3) // NaN after an overflow counts as growth
+    }
+
+    #[test]
+    fn damped_limit_separates_stable_from_unstable_steps() {
+        for (omega, gamma) in [(1000.0, 0.0), (990.0, 425.0), (300.0, 2000.0)] {
+            let h = damped_explicit_limit(omega, gamma);
+            assert!(!grows(omega, gamma, 0.99 * h), "omega {omega} gamma {gamma}: 0.99 h grows");
+            assert!(grows(omega, gamma, 1.01 * h), "omega {omega} gamma {gamma}: 1.01 h is stable");
+        }
+        assert!((damped_explicit_limit(1000.0, 0.0) - 2e-3).abs() < 1e-15);
+    }
 }
