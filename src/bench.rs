@@ -55,6 +55,17 @@ pub fn time_per_call(budget_s: f64, mut f: impl FnMut()) -> f64 {
     samples[samples.len() / 2]
 }
 
+/// [`time_per_call`] of a fallible `f`: the first error, if any call fails.
+pub fn time_fallible<E>(budget_s: f64, mut f: impl FnMut() -> Result<(), E>) -> Result<f64, E> {
+    let mut failed = None;
+    let t = time_per_call(budget_s, || {
+        if let Err(e) = f() {
+            failed.get_or_insert(e);
+        }
+    });
+    failed.map_or(Ok(t), Err)
+}
+
 fn paper_params() -> MsmParams {
     MsmParams::axis(968.2, 1010.0, 1137.7, 0.5)
 }
@@ -81,14 +92,7 @@ fn implicit_step(n: usize, params: MsmParams, prefactored: bool) -> anyhow::Resu
     let step =
         |d: &mut Dynamics| if prefactored { d.step_prefactored(&model, 1e-3) } else { d.step_implicit(&model, 1e-3) };
     step(&mut dynamics)?;
-    let mut result = Ok(());
-    let t = time_per_call(0.5, || {
-        if let Err(e) = step(&mut dynamics) {
-            result = Err(e);
-        }
-    });
-    result?;
-    Ok(t)
+    Ok(time_fallible(0.5, || step(&mut dynamics))?)
 }
 
 /// Runs every benchmark (about 10 s in a release build).

@@ -106,6 +106,11 @@ impl FemDynamics {
         self.implicit = None;
     }
 
+    /// Rest positions, interleaved.
+    pub fn rest(&self) -> &[f64] {
+        &self.rest
+    }
+
     /// Displacements from rest, interleaved.
     pub fn displacement(&self, out: &mut [f64]) {
         for ((o, x), r) in out.iter_mut().zip(&self.x).zip(&self.rest) {

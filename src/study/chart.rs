@@ -17,7 +17,7 @@
 
 use std::time::Instant;
 
-use crate::bench::time_per_call;
+use crate::bench::{time_fallible, time_per_call};
 use crate::cases::LoadCase;
 use crate::fem::clamped::ClampedSolver;
 use crate::fem::dynamics::{FemDynamics, Formulation};
@@ -127,6 +127,34 @@ pub struct ChartOptions {
 impl Default for ChartOptions {
     fn default() -> Self {
         Self { objects: vec!["A".into(), "B".into()], resolutions: vec![4, 8, 16, 32], timing_s: 0.15 }
+    }
+}
+
+/// What the points of one model and resolution share.
+struct PointBase<'a> {
+    object: &'a str,
+    model: ModelKind,
+    n: usize,
+    static_s: f64,
+    avg: f64,
+    max: f64,
+}
+
+impl PointBase<'_> {
+    fn point(&self, integrator: &str, step_s: f64, dt_max_s: f64, memory_bytes: usize) -> ChartPoint {
+        ChartPoint {
+            object: self.object.into(),
+            model: self.model.name(),
+            n: self.n,
+            integrator: integrator.into(),
+            step_s,
+            dt_max_s,
+            static_s: self.static_s,
+            memory_bytes,
+            avg_err_pct: self.avg,
+            max_err_pct: self.max,
+            pareto: false,
+        }
     }
 }
 
@@ -248,32 +276,12 @@ fn msm_points(
         let mut dynamics = Dynamics::new(&model);
         dynamics.apply_case(&cs[0]);
         dynamics.step_prefactored(&model, 1e-3)?;
-        let mut failed = None;
-        let implicit = time_per_call(opts.timing_s, || {
-            if let Err(e) = dynamics.step_prefactored(&model, 1e-3) {
-                failed = Some(e);
-            }
-        });
-        if let Some(e) = failed {
-            return Err(e.into());
-        }
+        let implicit = time_fallible(opts.timing_s, || dynamics.step_prefactored(&model, 1e-3))?;
         out.push(("implicit", implicit, f64::INFINITY, base + dynamics.prefactored_memory_bytes()));
     }
-    let point = |integrator: &str, step_s, dt_max_s, memory_bytes| ChartPoint {
-        object: object.into(),
-        model: ModelKind::Msm(topology).name(),
-        n: grid.n(),
-        integrator: integrator.into(),
-        step_s,
-        dt_max_s,
-        static_s,
-        memory_bytes,
-        avg_err_pct: avg,
-        max_err_pct: max,
-        pareto: false,
-    };
-    let mut points = vec![point("explicit", explicit, dt_max, base)];
-    points.extend(out.into_iter().map(|(i, t, dt, m)| point(i, t, dt, m)));
+    let shared = PointBase { object, model: ModelKind::Msm(topology), n: grid.n(), static_s, avg, max };
+    let mut points = vec![shared.point("explicit", explicit, dt_max, base)];
+    points.extend(out.into_iter().map(|(i, t, dt, m)| shared.point(i, t, dt, m)));
     Ok(points)
 }
 
@@ -308,32 +316,12 @@ fn fem_points(
     let mut implicit = None;
     if grid.n() <= MAX_COUPLED_IMPLICIT_N {
         fem.step_prefactored(1e-3)?;
-        let mut failed = None;
-        let t = time_per_call(opts.timing_s, || {
-            if let Err(e) = fem.step_prefactored(1e-3) {
-                failed = Some(e);
-            }
-        });
-        if let Some(e) = failed {
-            return Err(e.into());
-        }
+        let t = time_fallible(opts.timing_s, || fem.step_prefactored(1e-3))?;
         implicit = Some((t, fem.memory_bytes()));
     }
-    let point = |integrator: &str, step_s, dt_max_s, memory_bytes| ChartPoint {
-        object: object.into(),
-        model: ModelKind::Fem(formulation).name(),
-        n: grid.n(),
-        integrator: integrator.into(),
-        step_s,
-        dt_max_s,
-        static_s,
-        memory_bytes,
-        avg_err_pct: avg,
-        max_err_pct: max,
-        pareto: false,
-    };
-    let mut points = vec![point("explicit", explicit, dt_max, without)];
-    points.extend(implicit.map(|(t, m)| point("implicit", t, f64::INFINITY, m)));
+    let shared = PointBase { object, model: ModelKind::Fem(formulation), n: grid.n(), static_s, avg, max };
+    let mut points = vec![shared.point("explicit", explicit, dt_max, without)];
+    points.extend(implicit.map(|(t, m)| shared.point("implicit", t, f64::INFINITY, m)));
     Ok(points)
 }
 
@@ -346,7 +334,7 @@ fn corotational_static(
     case: &LoadCase,
 ) -> anyhow::Result<Vec<[f64; 3]>> {
     fem.apply_case(case);
-    let rest: Vec<f64> = fem.model.grid.positions().into_iter().flatten().collect();
+    let rest = fem.rest().to_vec();
     fem.x.copy_from_slice(&rest);
     let mut residual = case.clone();
     let mut u = vec![0.0; rest.len()];

@@ -118,11 +118,7 @@ fn msm_stable(model: &MsmModel, case: &LoadCase, dt: f64) -> bool {
 fn fem_stable(fem: &mut FemDynamics, dt: f64) -> bool {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
     fem.v.fill(0.0);
-    let mut rest = vec![0.0; fem.x.len()];
-    fem.displacement(&mut rest);
-    for (r, x) in rest.iter_mut().zip(&fem.x) {
-        *r = x - *r; // rest positions
-    }
+    let rest = fem.rest().to_vec();
     for i in 0..fem.x.len() {
         fem.x[i] = rest[i] + fem.free[i] * PERTURBATION_M * (2.0 * rng.random::<f64>() - 1.0);
     }
