@@ -1,6 +1,6 @@
 //! The command line: one subcommand per computation, JSON formats of `shared/spec/benchmark.md`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context as _, bail};
@@ -76,19 +76,19 @@ pub enum Command {
         #[arg(long, value_enum, default_value = "hybrid")]
         method: Method,
         /// Random seed (same seed and settings: same result).
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
         seed: u64,
         /// Population size.
-        #[arg(long, default_value_t = 50)]
+        #[arg(long, default_value_t = 50, allow_hyphen_values = true)]
         population: usize,
         /// Generations (temperature steps for SA).
-        #[arg(long, default_value_t = 100)]
+        #[arg(long, default_value_t = 100, allow_hyphen_values = true)]
         generations: usize,
         /// Mutation probability per chromosome.
-        #[arg(long, default_value_t = 0.2)]
+        #[arg(long, default_value_t = 0.2, allow_hyphen_values = true)]
         mutation: f64,
         /// Crossover probability per selected pair.
-        #[arg(long, default_value_t = 0.8)]
+        #[arg(long, default_value_t = 0.8, allow_hyphen_values = true)]
         crossover: f64,
         /// Cost: static equilibria (the paper's).
         #[arg(long, value_enum, default_value = "static")]
@@ -111,7 +111,7 @@ pub enum Command {
         #[arg(long)]
         out: PathBuf,
         /// Seeds per method and object.
-        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..=1000))]
+        #[arg(long, default_value_t = 10, allow_hyphen_values = true, value_parser = clap::value_parser!(u64).range(1..=1000))]
         seeds: u64,
         /// Skip the richer lattices' calibrations (shear and hex, about 55 s per object).
         #[arg(long)]
@@ -127,7 +127,7 @@ pub enum Command {
         #[arg(long, value_delimiter = ',', default_value = "A,B")]
         objects: Vec<String>,
         /// Resolutions, nodes per axis (2..=32).
-        #[arg(long, value_delimiter = ',', default_value = "4,8,16,32")]
+        #[arg(long, value_delimiter = ',', default_value = "4,8,16,32", allow_hyphen_values = true)]
         resolutions: Vec<usize>,
         /// Skip the stability study (about 40 s).
         #[arg(long)]
@@ -137,10 +137,10 @@ pub enum Command {
     /// error budget at a step rate, explained from the chart's data.
     Choose {
         /// Error budget, percent of the paper's h (L/7), against the fine FEM.
-        #[arg(long = "max-error", value_name = "PCT")]
+        #[arg(long = "max-error", value_name = "PCT", allow_hyphen_values = true)]
         max_error: f64,
         /// Real-time step rate the model must keep up with, Hz (1 kHz: haptics).
-        #[arg(long, default_value_t = 1000.0)]
+        #[arg(long, default_value_t = 1000.0, allow_hyphen_values = true)]
         rate: f64,
         /// Object.
         #[arg(long, default_value = "A")]
@@ -159,10 +159,10 @@ pub enum Command {
         #[arg(long)]
         out: PathBuf,
         /// Image width, pixels.
-        #[arg(long, default_value_t = 1280)]
+        #[arg(long, default_value_t = 1280, allow_hyphen_values = true)]
         width: u32,
         /// Image height, pixels.
-        #[arg(long, default_value_t = 720)]
+        #[arg(long, default_value_t = 720, allow_hyphen_values = true)]
         height: u32,
         /// A benchmark case to show in static equilibrium, e.g. A_clamped_ax1_F10 (default: object A at rest).
         #[arg(long)]
@@ -174,7 +174,7 @@ pub enum Command {
         #[arg(long, value_enum, default_value = "shear")]
         model: Topology,
         /// Displacement magnification of the drawn shape.
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
         magnify: f64,
     },
     /// Run a scripted sequence of tool actions (drag, probe, release, wait) without rendering;
@@ -219,7 +219,7 @@ pub struct ObjectArgs {
 #[derive(Debug, Args)]
 pub struct GridArgs {
     /// Nodes per axis (the paper: 8).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, allow_hyphen_values = true)]
     pub nodes: usize,
 }
 
@@ -227,28 +227,28 @@ pub struct GridArgs {
 #[derive(Debug, Args)]
 pub struct ParamArgs {
     /// Axis-1 spring stiffness, N/m.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub k1: Option<f64>,
     /// Axis-2 spring stiffness, N/m.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub k2: Option<f64>,
     /// Axis-3 spring stiffness, N/m (equal to k2 for a transversely isotropic object).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub k3: Option<f64>,
     /// Nodal damping, N s/m (no effect on a static answer).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub d: Option<f64>,
     /// Face-diagonal stiffness, 1-2 plane, N/m (shear model).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub c12: Option<f64>,
     /// Face-diagonal stiffness, 1-3 plane, N/m (shear model; = c12 for transversely isotropic).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub c13: Option<f64>,
     /// Face-diagonal stiffness, 2-3 plane, N/m (shear model).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub c23: Option<f64>,
     /// Body-diagonal stiffness, N/m (hex model, which also needs the c's).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub b: Option<f64>,
 }
 
@@ -278,9 +278,6 @@ impl ParamArgs {
         let k2 = self.k2.context("missing --k2")?;
         let ti = material.is_transversely_isotropic();
         let k3 = match (self.k3, ti) {
-            (Some(k3), true) if k3 != k2 => {
-                bail!("object {} is transversely isotropic: --k3 must equal --k2 (or be left out)", material.name)
-            }
             (Some(k3), _) => k3,
             (None, true) => k2,
             (None, false) => bail!("missing --k3 (object {} is orthotropic)", material.name),
@@ -290,9 +287,6 @@ impl ParamArgs {
             let c12 = self.c12.context("the shear model needs --c12")?;
             let c23 = self.c23.context("the shear model needs --c23")?;
             let c13 = match (self.c13, ti) {
-                (Some(c13), true) if c13 != c12 => {
-                    bail!("object {} is transversely isotropic: --c13 must equal --c12", material.name)
-                }
                 (Some(c13), _) => c13,
                 (None, true) => c12,
                 (None, false) => bail!("the shear model needs --c13 (object {} is orthotropic)", material.name),
@@ -306,6 +300,7 @@ impl ParamArgs {
             p.b = Some(b);
         }
         p.validate()?;
+        p.check_ties(ti).with_context(|| format!("object {}", material.name))?;
         Ok(p)
     }
 }
@@ -317,9 +312,16 @@ struct ParamsFile {
     params: MsmParams,
 }
 
-/// Runs the command line and maps errors to a message and exit code 1.
+/// Runs the command line and maps errors (the argument parser's included) to a message and exit
+/// code 1; `--help` and `--version` exit 0.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { ExitCode::FAILURE } else { ExitCode::SUCCESS };
+        }
+    };
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -337,13 +339,29 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Simulate { script, out }) => {
             let s: crate::script::Script = read_json(&script)?;
             let outcome = crate::script::run(&s).with_context(|| format!("in {}", script.display()))?;
-            write_json_atomic(&out, &outcome)
+            outcome.check_finite()?;
+            crate::io::write_json_compact(&out, &outcome)
         }
         Some(Command::Fem { object, bc, grid, out }) => {
             let material = object.material(None)?;
             let grid = grid.grid()?;
+            check_solver_size("fem", bc, grid.n())?;
             let cases = benchmark_cases(&grid, &material.name, bc);
-            let sols = FemModel::new(grid, &material).solve_cases(&cases)?;
+            let bar = progress_bar(cases.len() as u64, "cases");
+            let sols = FemModel::new(grid, &material)
+                .solve_cases_with_progress(&cases, &mut |i, id| {
+                    bar.set_position(i as u64);
+                    bar.set_message(id.to_owned());
+                })
+                .with_context(|| {
+                    format!(
+                        "solving the FEM stiffness system of material {} at {n}^3 ({} cases)",
+                        material.name,
+                        bc.name(),
+                        n = grid.n()
+                    )
+                })?;
+            bar.finish_and_clear();
             let file = DisplacementFile {
                 object: material.name.clone(),
                 bc: bc.name().into(),
@@ -352,15 +370,25 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 cases: sols.iter().map(CaseRecord::from_solution).collect(),
                 params: None,
             };
+            file.check_finite()?;
             write_json_atomic(&out, &file)
         }
         Some(Command::Msm { object, params, grid, out }) => {
             let material = object.material(None)?;
             let params = params.resolve(&material)?;
             let grid = grid.grid()?;
+            if params.topology() != Topology::Axis {
+                check_solver_size("msm", Bc::Clamped, grid.n())?;
+            }
             let model = MsmModel::new(grid, params, material.density)?;
             let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
-            let sols = statics::solve_cases(&model, &cases)?;
+            let bar = progress_bar(cases.len() as u64, "cases");
+            let sols = statics::solve_cases_with_progress(&model, &cases, &mut |i, id| {
+                bar.set_position(i as u64);
+                bar.set_message(id.to_owned());
+            })
+            .with_context(|| msm_context(&material, &params, grid.n()))?;
+            bar.finish_and_clear();
             let file = DisplacementFile {
                 object: material.name.clone(),
                 bc: Bc::Clamped.name().into(),
@@ -369,6 +397,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 cases: sols.iter().map(CaseRecord::from_solution).collect(),
                 params: Some(params),
             };
+            file.check_finite()?;
             write_json_atomic(&out, &file)
         }
         Some(Command::Errors { object, params, params_file, grid, json }) => {
@@ -377,6 +406,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                     let file: ParamsFile = read_json(&path)?;
                     let material = object.material(file.object.as_deref())?;
                     file.params.validate().with_context(|| format!("in {}", path.display()))?;
+                    file.params
+                        .check_ties(material.is_transversely_isotropic())
+                        .with_context(|| format!("in {} (object {})", path.display(), material.name))?;
                     (material, file.params)
                 }
                 None => {
@@ -414,24 +446,26 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 let hi: f64 = hi.trim().parse().with_context(|| format!("--bound {b:?}: bad upper bound"))?;
                 space.set_bound(name.trim(), lo, hi).map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
             }
-            let problem = Problem::new(material, grid, model)?;
-            let steps = generations as u64;
-            let bar = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
-                let bar = indicatif::ProgressBar::new(steps);
-                bar.set_style(
-                    indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} generations, {msg} [{elapsed}]")
-                        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-                );
-                bar
-            } else {
-                indicatif::ProgressBar::hidden()
-            };
+            if model != Topology::Axis {
+                check_solver_size("msm", Bc::Clamped, grid.n())?;
+            }
+            let name = material.name.clone();
+            let problem = Problem::new(material, grid, model)
+                .with_context(|| format!("the FEM reference of material {name} at {}^3", grid.n()))?;
+            let bar = progress_bar(generations as u64, "generations");
             let cancel = std::sync::atomic::AtomicBool::new(false);
             let result = calibrate(&problem, &space, &settings, &cancel, &mut |s| {
                 bar.set_position(s.generation as u64);
                 bar.set_message(format!("best cost {:.6e} m", s.best_cost));
-            })?;
+            })
+            .with_context(|| format!("calibrating the {model:?} MSM of material {name}"))?;
             bar.finish_and_clear();
+            if !result.cost.is_finite() {
+                bail!(
+                    "calibration of material {name} found no parameter set with a finite cost inside the bounds \
+                     (every evaluation failed); widen or move the --bound ranges"
+                );
+            }
             write_json_atomic(&out, &result)
         }
         Some(Command::Reproduce { out, seeds, no_shear }) => {
@@ -442,6 +476,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Render { out, width, height, case, colour, model, magnify }) => {
             if !(magnify.is_finite() && magnify >= 0.0) {
                 bail!("--magnify must be a non-negative number, got {magnify}");
+            }
+            if !(16..=8192).contains(&width) || !(16..=8192).contains(&height) {
+                bail!("--width and --height must be from 16 to 8192 pixels, got {width}x{height}");
             }
             let scene = crate::scene::StaticScene::new(case.as_deref(), model, colour, magnify)?;
             let png = scene.render_png(width, height)?;
@@ -492,6 +529,53 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
+/// A progress bar on a terminal (hidden otherwise) counting `len` `unit`.
+fn progress_bar(len: u64, unit: &str) -> indicatif::ProgressBar {
+    if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!("{{spinner}} {{bar:40}} {{pos}}/{{len}} {unit}, {{msg}} [{{elapsed}}]"))
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
+}
+
+/// The largest grid each solver accepts, nodes per axis, at the memory its factor needs (the
+/// sparse factor bound, [`crate::sparse::MAX_FACTOR_BYTES`]); checked before any work.
+pub const MAX_NODES_FEM_PATCH: usize = 32;
+/// See [`MAX_NODES_FEM_PATCH`]: the static Newton solve of the shear and hex lattices.
+pub const MAX_NODES_MSM_NEWTON: usize = 40;
+
+fn check_solver_size(solver: &str, bc: Bc, n: usize) -> anyhow::Result<()> {
+    let (max, what) = match (solver, bc) {
+        ("fem", Bc::Patch) => (MAX_NODES_FEM_PATCH, "the FEM patch cases (a full, unreduced system)"),
+        ("msm", _) => (MAX_NODES_MSM_NEWTON, "the static Newton solve of the shear and hex lattices"),
+        _ => return Ok(()),
+    };
+    if n > max {
+        bail!(
+            "--nodes {n} is too large for {what}: at most {max} nodes per axis, whose factor fits the bound of {} MB",
+            crate::sparse::MAX_FACTOR_BYTES >> 20
+        );
+    }
+    Ok(())
+}
+
+/// What a failed MSM solve was solving.
+fn msm_context(material: &Material, params: &MsmParams, n: usize) -> String {
+    format!(
+        "solving the static equilibrium of the {:?} MSM of material {} at {n}^3 with k1 = {}, k2 = {}, k3 = {} N/m",
+        params.topology(),
+        material.name,
+        params.k1,
+        params.k2,
+        params.k3
+    )
+}
+
 fn chart_options(objects: Vec<String>, resolutions: Vec<usize>) -> anyhow::Result<crate::study::chart::ChartOptions> {
     let objects: Vec<String> = objects.iter().map(|o| o.trim().to_ascii_uppercase()).collect();
     for o in &objects {
@@ -511,12 +595,24 @@ fn chart_options(objects: Vec<String>, resolutions: Vec<usize>) -> anyhow::Resul
 }
 
 fn errors(material: &Material, params: MsmParams, grid: Grid, json: bool) -> anyhow::Result<()> {
+    if params.topology() != Topology::Axis {
+        check_solver_size("msm", Bc::Clamped, grid.n())?;
+    }
     let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
-    let fem = FemModel::new(grid, material).solve_cases(&cases)?;
+    let fem = FemModel::new(grid, material)
+        .solve_cases(&cases)
+        .with_context(|| format!("solving the FEM stiffness system of material {} at {}^3", material.name, grid.n()))?;
     let model = MsmModel::new(grid, params, material.density)?;
-    let msm = statics::solve_cases(&model, &cases)?;
+    let msm = statics::solve_cases(&model, &cases).with_context(|| msm_context(material, &params, grid.n()))?;
     let errs = case_errors(grid.h(), &msm, &fem);
     let total = cost(&msm, &fem);
+    if !total.is_finite() {
+        bail!(
+            "the MSM-vs-FEM cost of material {} is not finite (cost {total}): the parameters are outside what \
+             floating point represents",
+            material.name
+        );
+    }
     if json {
         let v = serde_json::json!({
             "object": material.name,
@@ -533,7 +629,3 @@ fn errors(material: &Material, params: MsmParams, grid: Grid, json: bool) -> any
     Ok(())
 }
 
-/// Used by tests: the displacement file at `path`.
-pub fn read_displacements(path: &Path) -> anyhow::Result<DisplacementFile> {
-    read_json(path)
-}

@@ -1,6 +1,6 @@
 //! The JSON files of the headless command line (`shared/spec/benchmark.md`), written atomically.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
@@ -41,6 +41,24 @@ pub struct DisplacementFile {
     pub params: Option<crate::msm::MsmParams>,
 }
 
+impl DisplacementFile {
+    /// Checks that every displacement and reaction is finite (before the file is written).
+    pub fn check_finite(&self) -> anyhow::Result<()> {
+        for c in &self.cases {
+            let reaction = c.reaction_n.iter().flatten();
+            if !c.displacements.iter().flatten().chain(reaction).all(|v| v.is_finite()) {
+                anyhow::bail!(
+                    "the {} answer of case {} is not finite (the parameters are outside what floating point can \
+                     represent); nothing was written",
+                    self.model,
+                    c.case_id
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
 impl CaseRecord {
     /// The record of a solved case.
     pub fn from_solution(s: &CaseSolution) -> Self {
@@ -54,8 +72,17 @@ impl CaseRecord {
     }
 }
 
-/// Writes `value` as pretty JSON to `path` atomically: a temporary file in the same directory,
-/// flushed, then renamed over the target. A failure leaves no partial file behind.
+/// A number as a message shows it: plain when moderate, in exponent form when tiny or huge
+/// (so that `1e-320` does not print as three hundred zeros).
+pub fn num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e7).contains(&v.abs()) { format!("{v}") } else { format!("{v:e}") }
+}
+
+/// Largest file any command writes, bytes: a bound no input can exceed (a result over it is an
+/// error naming the bound, and nothing is written).
+pub const MAX_OUTPUT_BYTES: usize = 256 << 20;
+
+/// Writes `value` as pretty JSON to `path` with [`write_atomic`].
 pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> anyhow::Result<()> {
     use anyhow::Context as _;
     let mut text = serde_json::to_string_pretty(value).context("cannot serialise to JSON")?;
@@ -63,11 +90,125 @@ pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> anyhow::Result
     write_atomic(path, text.as_bytes())
 }
 
-/// Writes `bytes` to `path` atomically (temporary file in the same directory, then rename).
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+/// Writes `value` as compact JSON (one line) to `path` with [`write_atomic`].
+pub fn write_json_compact<T: Serialize>(path: &Path, value: &T) -> anyhow::Result<()> {
     use anyhow::Context as _;
+    let mut text = serde_json::to_string(value).context("cannot serialise to JSON")?;
+    text.push('\n');
+    write_atomic(path, text.as_bytes())
+}
+
+/// Where an output path leads.
+#[derive(Debug, PartialEq)]
+enum Target {
+    /// Standard output (`-`).
+    Stdout,
+    /// A device, fifo or socket, or a descriptor alias such as `/dev/stdout`: written in place.
+    Special(PathBuf),
+    /// A regular file, or nothing yet: written atomically at this path (symlinks followed).
+    Regular(PathBuf),
+}
+
+/// `/dev/stdout`, `/dev/stderr`, `/dev/fd/N`, `/proc/self/fd/N`: whatever the descriptor is (a
+/// terminal, a pipe, or a file the shell opened with `>`), it is written through, never replaced.
+fn is_descriptor_alias(p: &Path) -> bool {
+    p == Path::new("/dev/stdout")
+        || p == Path::new("/dev/stderr")
+        || p.starts_with("/dev/fd")
+        || p.starts_with("/proc/self/fd")
+        || p.starts_with("/proc/thread-self/fd")
+}
+
+/// Follows `path` through symbolic links (also dangling ones) to the path that will be written.
+fn resolve(path: &Path) -> anyhow::Result<Target> {
+    use anyhow::{Context as _, bail};
+    if path.as_os_str() == "-" {
+        return Ok(Target::Stdout);
+    }
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        if is_descriptor_alias(&p) {
+            return Ok(Target::Special(p));
+        }
+        let meta = match std::fs::symlink_metadata(&p) {
+            Ok(m) => m,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Target::Regular(p)),
+            Err(e) => return Err(e).with_context(|| format!("cannot write {}", path.display())),
+        };
+        let ft = meta.file_type();
+        if ft.is_symlink() {
+            let link = std::fs::read_link(&p).with_context(|| format!("cannot follow the link {}", p.display()))?;
+            p = match p.parent() {
+                Some(parent) if link.is_relative() => parent.join(link),
+                _ => link,
+            };
+            continue;
+        }
+        if ft.is_dir() {
+            bail!("cannot write {}: it is a directory", path.display());
+        }
+        if ft.is_file() {
+            return Ok(Target::Regular(p));
+        }
+        return Ok(Target::Special(p));
+    }
+    bail!("cannot write {}: too many levels of symbolic links", path.display())
+}
+
+/// Writes `bytes` to `path` without ever damaging what `path` names:
+/// - `-` writes to standard output; a device, fifo or socket (`/dev/null`, say), and a
+///   descriptor alias (`/dev/stdout`, `/dev/fd/N`), is opened and written in place;
+/// - a symbolic link is followed, and its target written;
+/// - a regular file (or a new one) is written atomically: a temporary file in the same
+///   directory, flushed, then renamed over the target, so a failure leaves no partial file. A
+///   replaced file keeps its permissions (and, where allowed, its owner); a write-protected file
+///   is refused, even for root.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    use anyhow::{Context as _, bail};
     use std::io::Write as _;
-    let dir = match path.parent() {
+    if bytes.len() > MAX_OUTPUT_BYTES {
+        bail!(
+            "refusing to write {}: the output would be {} MB, above the bound of {} MB",
+            path.display(),
+            bytes.len() >> 20,
+            MAX_OUTPUT_BYTES >> 20
+        );
+    }
+    let target = match resolve(path)? {
+        Target::Stdout => {
+            let mut out = std::io::stdout().lock();
+            out.write_all(bytes).and_then(|()| out.flush()).context("cannot write to standard output")?;
+            return Ok(());
+        }
+        Target::Special(p) => {
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(&p)
+                .with_context(|| format!("cannot open {} for writing", path.display()))?;
+            // A descriptor alias may lead to a regular file (a shell's `>`): start it afresh.
+            if f.metadata().is_ok_and(|m| m.is_file()) {
+                f.set_len(0).with_context(|| format!("cannot write {}", path.display()))?;
+            }
+            f.write_all(bytes).with_context(|| format!("cannot write {}", path.display()))?;
+            return Ok(());
+        }
+        Target::Regular(p) => p,
+    };
+    let existing = match std::fs::metadata(&target) {
+        Ok(m) => Some(m),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+        Err(e) => return Err(e).with_context(|| format!("cannot write {}", path.display())),
+    };
+    if let Some(m) = &existing {
+        if m.permissions().readonly() {
+            bail!("refusing to overwrite {}: the file is write-protected", path.display());
+        }
+        // Permission to write the file itself, not only its directory.
+        if let Err(e) = std::fs::OpenOptions::new().write(true).open(&target) {
+            return Err(e).with_context(|| format!("cannot overwrite {}", path.display()));
+        }
+    }
+    let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
@@ -76,19 +217,202 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt as _;
-        // Like a plain File::create: readable by others (the umask still applies at creation).
-        builder.permissions(std::fs::Permissions::from_mode(0o644));
+        // A new file like a plain File::create (the umask applies); a replaced file keeps its mode.
+        let mode = existing.as_ref().map_or(0o644, |m| m.permissions().mode() & 0o7777);
+        builder.permissions(std::fs::Permissions::from_mode(mode));
     }
-    let mut tmp = builder.tempfile_in(dir).with_context(|| format!("cannot create a file in {}", dir.display()))?;
+    let mut tmp = builder
+        .tempfile_in(dir)
+        .with_context(|| format!("cannot write {}: cannot create a file in {}", path.display(), dir.display()))?;
+    #[cfg(unix)]
+    if let Some(m) = &existing {
+        use std::os::unix::fs::{MetadataExt as _, PermissionsExt as _};
+        // The umask may have cleared bits at creation: set the mode exactly, and the owner where
+        // this process may (root replacing another user's file).
+        let _ = tmp.as_file().set_permissions(std::fs::Permissions::from_mode(m.mode() & 0o7777));
+        let _ = std::os::unix::fs::fchown(tmp.as_file(), Some(m.uid()), Some(m.gid()));
+    }
     tmp.write_all(bytes).with_context(|| format!("cannot write {}", path.display()))?;
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).with_context(|| format!("cannot write {}", path.display()))?;
+    tmp.as_file().sync_all().with_context(|| format!("cannot write {}", path.display()))?;
+    tmp.persist(&target).map_err(|e| e.error).with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
 }
 
-/// Reads a JSON file.
+/// A set of files for one output directory, written only once all of them exist: into a fresh
+/// sibling directory that is then renamed into place (or, when the directory already exists,
+/// each file atomically into it). An interrupted command leaves no half-written directory.
+#[derive(Debug, Default)]
+pub struct OutputDir {
+    files: Vec<(String, Vec<u8>)>,
+}
+
+impl OutputDir {
+    /// Checks, before any work, that `dir` can be written: an existing directory, or a path
+    /// whose parent directory exists.
+    pub fn check(dir: &Path) -> anyhow::Result<()> {
+        use anyhow::bail;
+        match std::fs::metadata(dir) {
+            Ok(m) if m.is_dir() => Ok(()),
+            Ok(_) => bail!("cannot write to {}: it exists and is not a directory", dir.display()),
+            Err(_) => {
+                let parent = match dir.parent() {
+                    Some(p) if !p.as_os_str().is_empty() => p,
+                    _ => Path::new("."),
+                };
+                if parent.is_dir() {
+                    Ok(())
+                } else {
+                    bail!("cannot create {}: its parent directory {} does not exist", dir.display(), parent.display())
+                }
+            }
+        }
+    }
+
+    /// Adds a file (a plain name, no directories).
+    pub fn add(&mut self, name: impl Into<String>, bytes: impl Into<Vec<u8>>) {
+        self.files.push((name.into(), bytes.into()));
+    }
+
+    /// Writes every file into `dir`.
+    pub fn commit(&self, dir: &Path) -> anyhow::Result<()> {
+        use anyhow::Context as _;
+        Self::check(dir)?;
+        if dir.is_dir() {
+            for (name, bytes) in &self.files {
+                write_atomic(&dir.join(name), bytes)?;
+            }
+            return Ok(());
+        }
+        let parent = match dir.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let tmp = tempfile::Builder::new()
+            .prefix(".tissue-sim-")
+            .tempdir_in(parent)
+            .with_context(|| format!("cannot create a directory in {}", parent.display()))?;
+        for (name, bytes) in &self.files {
+            write_atomic(&tmp.path().join(name), bytes)?;
+        }
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt as _;
+            let _ = std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(0o755));
+        }
+        let kept = tmp.keep();
+        std::fs::rename(&kept, dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        Ok(())
+    }
+}
+
+/// Reads a JSON file (at most [`MAX_INPUT_BYTES`]).
 pub fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> anyhow::Result<T> {
     use anyhow::Context as _;
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text = read_text(path)?;
     serde_json::from_str(&text).with_context(|| format!("invalid JSON in {}", path.display()))
+}
+
+/// Largest input file read, bytes.
+pub const MAX_INPUT_BYTES: u64 = 16 << 20;
+
+/// Reads a text file of at most [`MAX_INPUT_BYTES`].
+pub fn read_text(path: &Path) -> anyhow::Result<String> {
+    use anyhow::{Context as _, bail};
+    use std::io::Read as _;
+    let f = std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+    if f.metadata().is_ok_and(|m| m.is_dir()) {
+        bail!("cannot read {}: it is a directory", path.display());
+    }
+    let mut text = String::new();
+    f.take(MAX_INPUT_BYTES + 1).read_to_string(&mut text).with_context(|| format!("cannot read {}", path.display()))?;
+    if text.len() as u64 > MAX_INPUT_BYTES {
+        bail!("{} is larger than the input bound of {} MB", path.display(), MAX_INPUT_BYTES >> 20);
+    }
+    Ok(text)
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+    use std::os::unix::fs::PermissionsExt as _;
+
+    #[test]
+    fn a_symlink_is_followed_not_replaced() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let real = dir.path().join("real.json");
+        std::fs::write(&real, "old").expect("write");
+        let link = dir.path().join("link.json");
+        std::os::unix::fs::symlink(&real, &link).expect("symlink");
+        write_atomic(&link, b"new").expect("write through the link");
+        assert!(std::fs::symlink_metadata(&link).expect("meta").file_type().is_symlink(), "the link was replaced");
+        assert_eq!(std::fs::read_to_string(&real).expect("read"), "new");
+        // A dangling link creates its target.
+        let target = dir.path().join("later.json");
+        let dangling = dir.path().join("dangling.json");
+        std::os::unix::fs::symlink("later.json", &dangling).expect("symlink");
+        write_atomic(&dangling, b"x").expect("write through a dangling link");
+        assert!(std::fs::symlink_metadata(&dangling).expect("meta").file_type().is_symlink());
+        assert_eq!(std::fs::read_to_string(&target).expect("read"), "x");
+    }
+
+    #[test]
+    fn a_fifo_is_written_in_place() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let fifo = dir.path().join("out.fifo");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs");
+        assert!(made.success());
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read_to_string(fifo).expect("read fifo"))
+        };
+        write_atomic(&fifo, b"through the pipe").expect("write to a fifo");
+        assert_eq!(reader.join().expect("reader"), "through the pipe");
+        let meta = std::fs::symlink_metadata(&fifo).expect("meta");
+        assert!(!meta.file_type().is_file(), "the fifo was replaced by a regular file");
+        // A symlink to a device is followed to the device, which stays a device.
+        let null_link = dir.path().join("null");
+        std::os::unix::fs::symlink("/dev/null", &null_link).expect("symlink");
+        write_atomic(&null_link, b"discarded").expect("write to /dev/null through a link");
+        assert!(!std::fs::metadata("/dev/null").expect("meta").is_file(), "/dev/null became a regular file");
+    }
+
+    #[test]
+    fn a_write_protected_file_is_refused_and_a_replaced_file_keeps_its_mode() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let locked = dir.path().join("locked.json");
+        std::fs::write(&locked, "keep me").expect("write");
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o444)).expect("chmod");
+        let e = write_atomic(&locked, b"clobbered").expect_err("write-protected");
+        assert!(format!("{e:#}").contains("write-protected"), "{e:#}");
+        assert_eq!(std::fs::read_to_string(&locked).expect("read"), "keep me");
+        let private = dir.path().join("private.json");
+        std::fs::write(&private, "old").expect("write");
+        std::fs::set_permissions(&private, std::fs::Permissions::from_mode(0o600)).expect("chmod");
+        write_atomic(&private, b"new").expect("write");
+        let mode = std::fs::metadata(&private).expect("meta").permissions().mode() & 0o777;
+        assert_eq!(mode, 0o600);
+        assert_eq!(std::fs::read_to_string(&private).expect("read"), "new");
+        // A directory is refused by name; an oversized output is refused before writing.
+        assert!(format!("{:#}", write_atomic(dir.path(), b"x").expect_err("dir")).contains("directory"));
+        let big = vec![b' '; MAX_OUTPUT_BYTES + 1];
+        let e = write_atomic(&dir.path().join("big"), &big).expect_err("too big");
+        assert!(format!("{e:#}").contains("bound"), "{e:#}");
+        assert!(!dir.path().join("big").exists());
+    }
+
+    #[test]
+    fn an_output_directory_appears_whole() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("report");
+        let mut files = OutputDir::default();
+        files.add("a.md", "a");
+        files.add("b.csv", "b");
+        assert!(!out.exists());
+        files.commit(&out).expect("commit");
+        assert_eq!(std::fs::read_to_string(out.join("b.csv")).expect("read"), "b");
+        files.commit(&out).expect("commit into an existing directory");
+        let names: Vec<_> = std::fs::read_dir(dir.path()).expect("ls").map(|e| e.expect("entry").file_name()).collect();
+        assert_eq!(names.len(), 1, "a temporary directory was left behind: {names:?}");
+        assert!(OutputDir::check(&dir.path().join("missing/report")).is_err());
+    }
 }

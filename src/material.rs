@@ -25,18 +25,28 @@ pub enum MaterialError {
         value: f64,
     },
     /// A modulus or the density is zero or negative.
-    #[error("material constant {name} must be positive, got {value}")]
+    #[error("material constant {name} must be positive, got {}", crate::io::num(*value))]
     NonPositive {
         /// Name of the constant.
         name: &'static str,
         /// The offending value.
         value: f64,
     },
+    /// A modulus or the density lies outside what the solvers can represent.
+    #[error("material constant {name} = {} is out of range ({range})", crate::io::num(*value))]
+    OutOfRange {
+        /// Name of the constant.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+        /// The accepted range, in words.
+        range: &'static str,
+    },
     /// The stiffness matrix `C` is not positive definite.
     #[error("material stiffness C is not positive definite: {0}")]
     NotPositiveDefinite(String),
     /// A material file could not be read.
-    #[error("cannot read material file {path}: {source}")]
+    #[error("cannot read material file {path}")]
     Io {
         /// The file.
         path: String,
@@ -61,6 +71,16 @@ pub enum Symmetry {
     Orthotropic,
     /// Axis 1 distinct, the 2-3 plane isotropic: five independent constants.
     TransverselyIsotropic,
+}
+
+impl Symmetry {
+    /// The name in words, as a material file spells it (with spaces).
+    pub fn name(self) -> &'static str {
+        match self {
+            Symmetry::Orthotropic => "orthotropic",
+            Symmetry::TransverselyIsotropic => "transversely isotropic",
+        }
+    }
 }
 
 /// The nine engineering constants of an orthotropic material, moduli in Pa.
@@ -104,6 +124,19 @@ fn check_positive(name: &'static str, value: f64) -> Result<(), MaterialError> {
     if value > 0.0 { Ok(()) } else { Err(MaterialError::NonPositive { name, value }) }
 }
 
+/// Range of a modulus, Pa: from a gel's 1 Pa to 10 GPa (stiffer than any soft tissue, and the
+/// stiffest whose spring and FEM matrices stay well inside floating point).
+pub const MODULUS_RANGE_PA: (f64, f64) = (1.0, 1e10);
+
+fn check_modulus(name: &'static str, value: f64) -> Result<(), MaterialError> {
+    check_positive(name, value)?;
+    if (MODULUS_RANGE_PA.0..=MODULUS_RANGE_PA.1).contains(&value) {
+        Ok(())
+    } else {
+        Err(MaterialError::OutOfRange { name, value, range: "moduli from 1 Pa to 1e10 Pa" })
+    }
+}
+
 impl EngineeringConstants {
     /// Compliance matrix `S` in Voigt order (11, 22, 33, 23, 13, 12).
     pub fn compliance(&self) -> Matrix6<f64> {
@@ -127,10 +160,10 @@ impl EngineeringConstants {
     /// constant or the condition at fault.
     pub fn validate(&self) -> Result<(), MaterialError> {
         for (name, v) in [("E1", self.e1), ("E2", self.e2), ("E3", self.e3)] {
-            check_positive(name, v)?;
+            check_modulus(name, v)?;
         }
         for (name, v) in [("G12", self.g12), ("G13", self.g13), ("G23", self.g23)] {
-            check_positive(name, v)?;
+            check_modulus(name, v)?;
         }
         for (name, v) in [("nu12", self.nu12), ("nu13", self.nu13), ("nu23", self.nu23)] {
             check_finite(name, v)?;
@@ -213,6 +246,13 @@ impl Material {
     ) -> Result<Self, MaterialError> {
         constants.validate()?;
         check_positive("density", density)?;
+        if !(1.0..=1e5).contains(&density) {
+            return Err(MaterialError::OutOfRange {
+                name: "density",
+                value: density,
+                range: "densities from 1 to 1e5 kg/m^3",
+            });
+        }
         let compliance = constants.compliance();
         let chol = compliance
             .cholesky()
@@ -270,7 +310,7 @@ impl Material {
             serde_json::from_str(&text)
                 .map_err(|e| MaterialError::Parse { path: shown.clone(), message: e.to_string() })?
         } else {
-            toml::from_str(&text).map_err(|e| MaterialError::Parse { path: shown.clone(), message: e.to_string() })?
+            toml::from_str(&text).map_err(|e| MaterialError::Parse { path: shown.clone(), message: toml_message(&text, &e) })?
         };
         let default_name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("custom");
         file.into_material(default_name).map_err(|e| match e {
@@ -282,6 +322,20 @@ impl Material {
     /// `true` for a transversely isotropic material (its MSM has `k3 = k2`).
     pub fn is_transversely_isotropic(&self) -> bool {
         self.symmetry == Symmetry::TransverselyIsotropic
+    }
+}
+
+/// A TOML error on one line: `line L, column C: message`.
+fn toml_message(text: &str, e: &toml::de::Error) -> String {
+    let message = e.message().trim().replace('\n', "; ");
+    match e.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("line {line}, column {column}: {message}")
+        }
+        None => message,
     }
 }
 
@@ -331,7 +385,7 @@ impl MaterialFile {
             other => return Err(parse(format!("units must be Pa, kPa or MPa, got {other:?}"))),
         };
         let need = |name: &str, v: Option<f64>| {
-            v.ok_or_else(|| parse(format!("missing constant {name} for a {:?} material", self.symmetry)))
+            v.ok_or_else(|| parse(format!("missing constant {name} for an {} material", self.symmetry.name())))
         };
         let name = self.name.clone().unwrap_or_else(|| default_name.to_owned());
         let density = self.density.unwrap_or(TISSUE_DENSITY);

@@ -101,6 +101,18 @@ impl StaticScene {
         let problem = Problem::new(material, grid, topology)?;
         let model = problem.model(&params)?;
         let u = crate::msm::statics::equilibrium(&model, &case)?;
+        let largest = u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()).fold(0.0, f64::max);
+        let side = crate::grid::CUBE_SIDE_M;
+        if magnify * largest > side {
+            anyhow::bail!(
+                "magnify {} would draw case {id}'s largest displacement ({:.3e} m) as {:.3e} m, beyond the cube's \
+                 side ({side} m); at most {:.0} for this case",
+                crate::io::num(magnify),
+                largest,
+                magnify * largest,
+                (side / largest).floor()
+            );
+        }
         let positions =
             rest.iter().zip(&u).map(|(r, d)| std::array::from_fn(|c| (r[c] + magnify * d[c]) as f32)).collect();
         let mut scalar_max = 0.0;

@@ -17,6 +17,14 @@
 //! node's position to `to` over `duration_s` and holds it there until `release`; a probe starts
 //! touching `at` and is pushed along `direction` to `depth` over `duration_s`, recording the
 //! force on it at `samples` evenly spaced depths, and stays until `release`.
+//!
+//! Every action takes an optional `"record": true`: its event then carries all node positions
+//! (the last action's event always does). Bounds that no script can exceed, each named in its
+//! error: [`MAX_TOTAL_STEPS`] steps in all, [`MAX_ACTIONS`] actions, [`MAX_RECORDED`] recorded
+//! events, [`MAX_SAMPLES`] probe samples; the output (compact JSON) is then at most a few MB.
+//! Points and sizes are in metres and must lie near the cube (within one side of it). The blow-up
+//! guard stops the run with an error after [`crate::sim::MAX_RECOVERIES`] blow-ups in a row, and
+//! a symplectic integrator forced above its stability limit is refused before any step.
 
 use serde::{Deserialize, Serialize};
 
@@ -58,13 +66,31 @@ fn default_clamp() -> String {
     "bottom".into()
 }
 
+/// Total steps of a script, all actions together.
+pub const MAX_TOTAL_STEPS: u64 = 10_000_000;
+/// Actions of a script.
+pub const MAX_ACTIONS: usize = 100_000;
+/// Events that carry node positions (`"record": true`, and the last).
+pub const MAX_RECORDED: usize = 200;
+/// Probe samples, all probe actions together.
+pub const MAX_SAMPLES: usize = 100_000;
+/// Blow-up messages listed (the guard stops a run long before, unless blow-ups keep recurring
+/// after healthy stretches).
+pub const MAX_BLOW_UPS: usize = 100;
+
 /// One scripted action.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(rename_all = "lowercase", deny_unknown_fields)]
 #[allow(missing_docs)]
 pub enum Action {
     /// Pull a node towards a point.
-    Drag { node: usize, to: [f64; 3], duration_s: f64 },
+    Drag {
+        node: usize,
+        to: [f64; 3],
+        duration_s: f64,
+        #[serde(default)]
+        record: bool,
+    },
     /// Push the spherical probe into the tissue.
     Probe {
         at: [f64; 3],
@@ -74,11 +100,41 @@ pub enum Action {
         duration_s: f64,
         #[serde(default = "default_samples")]
         samples: usize,
+        #[serde(default)]
+        record: bool,
     },
     /// Let go of whatever tool is held.
-    Release {},
+    Release {
+        #[serde(default)]
+        record: bool,
+    },
     /// Let time pass.
-    Wait { duration_s: f64 },
+    Wait {
+        duration_s: f64,
+        #[serde(default)]
+        record: bool,
+    },
+}
+
+impl Action {
+    /// Whether the action asks for node positions in its event.
+    pub fn record(&self) -> bool {
+        match self {
+            Action::Drag { record, .. }
+            | Action::Probe { record, .. }
+            | Action::Release { record }
+            | Action::Wait { record, .. } => *record,
+        }
+    }
+
+    fn duration_s(&self) -> f64 {
+        match self {
+            Action::Drag { duration_s, .. } | Action::Probe { duration_s, .. } | Action::Wait { duration_s, .. } => {
+                *duration_s
+            }
+            Action::Release { .. } => 0.0,
+        }
+    }
 }
 
 fn default_samples() -> usize {
@@ -98,8 +154,9 @@ pub struct Event {
     pub tool_force_n: [f64; 3],
     /// Largest distance of a node from its rest position, metres.
     pub max_displacement_m: f64,
-    /// Node positions, metres.
-    pub positions: Vec<[f64; 3]>,
+    /// Node positions, metres: only for an action with `"record": true`, and the last.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub positions: Option<Vec<[f64; 3]>>,
 }
 
 /// One probe sample.
@@ -139,11 +196,46 @@ pub struct Outcome {
 fn check(name: &str, v: f64, positive: bool) -> anyhow::Result<()> {
     if !v.is_finite() || v < 0.0 || (positive && v == 0.0) {
         anyhow::bail!(
-            "script: {name} must be a {} finite number, got {v}",
-            if positive { "positive" } else { "non-negative" }
+            "script: {name} must be a {} finite number, got {}",
+            if positive { "positive" } else { "non-negative" },
+            crate::io::num(v)
         );
     }
     Ok(())
+}
+
+/// A point must lie within one cube side of the cube: a coordinate typed in millimetres (or
+/// any runaway value) is refused by name rather than flinging the tissue.
+fn check_point(what: &str, p: &[f64; 3]) -> anyhow::Result<()> {
+    let l = crate::grid::CUBE_SIDE_M;
+    for (c, v) in p.iter().enumerate() {
+        if !v.is_finite() {
+            anyhow::bail!("script: {what}[{c}] is not finite");
+        }
+        if !(-l..=2.0 * l).contains(v) {
+            anyhow::bail!(
+                "script: {what} = {p:?} lies outside the cube's neighbourhood: coordinates are metres, the cube spans \
+                 0 to {l} m, and points must lie within {l} m of it"
+            );
+        }
+    }
+    Ok(())
+}
+
+impl Outcome {
+    /// Checks that every number of the outcome is finite (before it is written).
+    pub fn check_finite(&self) -> anyhow::Result<()> {
+        for e in &self.events {
+            let pos = e.positions.iter().flatten().flatten();
+            if !(e.tool_force_n.iter().chain(pos).all(|v| v.is_finite()) && e.max_displacement_m.is_finite()) {
+                anyhow::bail!("script: action {} ended in a non-finite state", e.action);
+            }
+        }
+        if self.force_depth.iter().any(|s| !s.force_n.is_finite()) {
+            anyhow::bail!("script: a probe force is not finite");
+        }
+        Ok(())
+    }
 }
 
 /// Runs a script.
@@ -155,9 +247,24 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     if !(1e-6..=0.05).contains(&script.dt) {
         anyhow::bail!("script: dt = {} s is out of range (1e-6 to 0.05 s)", script.dt);
     }
+    if script.actions.len() > MAX_ACTIONS {
+        anyhow::bail!("script: {} actions, above the bound of {MAX_ACTIONS}", script.actions.len());
+    }
+    let recorded = script.actions.iter().filter(|a| a.record()).count() + 1;
+    if recorded > MAX_RECORDED {
+        anyhow::bail!("script: {recorded} actions record positions, above the bound of {MAX_RECORDED}");
+    }
     let params = tissue_params(&material, script.model)?;
     let model = MsmModel::new(grid, params, material.density)?;
-    let integrator = script.integrator.unwrap_or_else(|| Simulation::default_integrator(&model, script.dt));
+    let limit = Simulation::explicit_dt_limit(&model);
+    let integrator = script.integrator.unwrap_or_else(|| Simulation::integrator_for(script.dt, limit));
+    if integrator == Integrator::Symplectic && script.dt > limit {
+        anyhow::bail!(
+            "script: symplectic Euler at dt = {:e} s is above its stability limit of about {limit:.3e} s for this \
+             tissue; lower dt, or choose \"integrator\": \"prefactored\" (or leave it out)",
+            script.dt
+        );
+    }
     let case: Option<LoadCase> = match script.clamp.as_str() {
         "none" => None,
         "bottom" => {
@@ -199,35 +306,65 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         }
         Ok(steps as u64)
     };
+    // Bounds on the whole script, before any work.
+    let mut total_steps = 0u64;
+    let mut total_samples = 0usize;
+    for (i, a) in script.actions.iter().enumerate() {
+        let n = steps_for(a.duration_s()).map_err(|e| anyhow::anyhow!("action {i}: {e}"))?;
+        total_steps += match a {
+            Action::Release { .. } => 0,
+            Action::Wait { .. } => n,
+            _ => n.max(1),
+        };
+        if let Action::Probe { samples, .. } = a {
+            total_samples += (*samples).clamp(1, 10_000);
+        }
+    }
+    if total_steps > MAX_TOTAL_STEPS {
+        anyhow::bail!(
+            "script: {total_steps} steps in all (at dt = {} s), above the bound of {MAX_TOTAL_STEPS} steps per script",
+            script.dt
+        );
+    }
+    if total_samples > MAX_SAMPLES {
+        anyhow::bail!("script: {total_samples} probe samples in all, above the bound of {MAX_SAMPLES}");
+    }
+    let last = script.actions.len().saturating_sub(1);
     for (i, action) in script.actions.iter().enumerate() {
         let kind;
         match action {
-            Action::Drag { node, to, duration_s } => {
+            Action::Drag { node, to, duration_s, .. } => {
                 kind = "drag";
                 if *node >= grid.num_nodes() {
                     anyhow::bail!("script: action {i}: node {node} does not exist (0..{})", grid.num_nodes());
                 }
-                for (c, v) in to.iter().enumerate() {
-                    if !v.is_finite() {
-                        anyhow::bail!("script: action {i}: to[{c}] is not finite");
-                    }
-                }
+                check_point(&format!("action {i}: drag target \"to\""), to)?;
                 let from: [f64; 3] = std::array::from_fn(|c| sim.dynamics.x[c][*node]);
                 let n = steps_for(*duration_s)?.max(1);
                 for s in 1..=n {
                     let f = s as f64 / n as f64;
                     sim.tool =
                         Tool::Drag { node: *node, target: std::array::from_fn(|c| from[c] + f * (to[c] - from[c])) };
-                    step(&mut sim, &mut out);
+                    step(&mut sim, &mut out)?;
                 }
             }
-            Action::Probe { at, direction, radius, depth, duration_s, samples } => {
+            Action::Probe { at, direction, radius, depth, duration_s, samples, .. } => {
                 kind = "probe";
                 check("radius", *radius, true)?;
                 check("depth", *depth, false)?;
+                let l = crate::grid::CUBE_SIDE_M;
+                if *radius > l || *depth > l {
+                    anyhow::bail!(
+                        "script: action {i}: probe radius {} m and depth {} m must each be at most the cube's side \
+                         ({l} m); sizes are metres",
+                        crate::io::num(*radius),
+                        crate::io::num(*depth)
+                    );
+                }
+                check_point(&format!("action {i}: probe point \"at\""), at)?;
                 let len = direction.iter().map(|d| d * d).sum::<f64>().sqrt();
-                if !(len.is_finite() && len > 0.0) || at.iter().any(|v| !v.is_finite()) {
-                    anyhow::bail!("script: action {i}: probe needs a finite point and a non-zero direction");
+                if !(len.is_finite() && len > 0.0) {
+                    anyhow::bail!("script: action {i}: probe needs a finite, non-zero direction");
                 }
                 let dir = direction.map(|d| d / len);
                 let n = steps_for(*duration_s)?.max(1);
@@ -236,7 +373,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
                     let d = depth * s as f64 / n as f64;
                     let centre = std::array::from_fn(|c| at[c] - radius * dir[c] + d * dir[c]);
                     sim.tool = Tool::Probe { centre, radius: *radius };
-                    step(&mut sim, &mut out);
+                    step(&mut sim, &mut out)?;
                     if s * samples % n < samples {
                         let f = sim.tool_force;
                         let along = -(f[0] * dir[0] + f[1] * dir[1] + f[2] * dir[2]);
@@ -244,25 +381,28 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
                     }
                 }
             }
-            Action::Release {} => {
+            Action::Release { .. } => {
                 kind = "release";
                 sim.tool = Tool::None;
                 sim.tool_force = [0.0; 3];
             }
-            Action::Wait { duration_s } => {
+            Action::Wait { duration_s, .. } => {
                 kind = "wait";
                 for _ in 0..steps_for(*duration_s)? {
-                    step(&mut sim, &mut out);
+                    step(&mut sim, &mut out)?;
                 }
             }
         }
-        let positions: Vec<[f64; 3]> =
-            (0..grid.num_nodes()).map(|p| std::array::from_fn(|c| sim.dynamics.x[c][p])).collect();
-        let max_displacement_m = positions
+        let position = |p: usize| -> [f64; 3] { std::array::from_fn(|c| sim.dynamics.x[c][p]) };
+        let max_displacement_m = rest
             .iter()
-            .zip(&rest)
-            .map(|(x, r)| ((x[0] - r[0]).powi(2) + (x[1] - r[1]).powi(2) + (x[2] - r[2]).powi(2)).sqrt())
+            .enumerate()
+            .map(|(p, r)| {
+                let x = position(p);
+                ((x[0] - r[0]).powi(2) + (x[1] - r[1]).powi(2) + (x[2] - r[2]).powi(2)).sqrt()
+            })
             .fold(0.0, f64::max);
+        let positions = (action.record() || i == last).then(|| (0..grid.num_nodes()).map(position).collect());
         out.events.push(Event {
             action: i,
             kind: kind.into(),
@@ -275,9 +415,21 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     Ok(out)
 }
 
-fn step(sim: &mut Simulation, out: &mut Outcome) {
+/// One step; a blow-up is listed, and one the guard gave up on stops the script.
+fn step(sim: &mut Simulation, out: &mut Outcome) -> anyhow::Result<()> {
+    out.steps += 1;
     if let Err(b) = sim.step() {
+        if b.fatal {
+            anyhow::bail!("simulation stopped at t = {:.4} s: {}", b.time_s, b.message);
+        }
+        if out.blow_ups.len() >= MAX_BLOW_UPS {
+            anyhow::bail!(
+                "simulation stopped at t = {:.4} s: {MAX_BLOW_UPS} blow-ups in all; the last: {}",
+                b.time_s,
+                b.message
+            );
+        }
         out.blow_ups.push(format!("t = {:.4} s: {}", b.time_s, b.message));
     }
-    out.steps += 1;
+    Ok(())
 }

@@ -61,6 +61,21 @@ pub struct BlowUp {
     pub time_s: f64,
     /// What went wrong and what to change.
     pub message: String,
+    /// The guard gave up: this was the [`MAX_RECOVERIES`]-th blow-up in a row (no healthy step
+    /// past the previous one's time), so the state went back to rest, the tool was let go, and
+    /// stepping on would only repeat it. The caller stops (a script fails; the viewer pauses).
+    pub fatal: bool,
+}
+
+/// Consecutive recoveries after which the guard stops a run ([`BlowUp::fatal`]).
+pub const MAX_RECOVERIES: u32 = 3;
+
+/// Why a state is not good.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Unhealthy {
+    NonFinite,
+    OutsideCube,
+    Energy,
 }
 
 /// The running tissue.
@@ -89,6 +104,10 @@ pub struct Simulation {
     contact_forces: [Vec<f64>; 3],
     /// [`Simulation::explicit_dt_limit`] of the current model.
     dt_limit: f64,
+    /// Blow-ups since the last healthy step past the previous blow-up's time.
+    recoveries: u32,
+    /// Simulated time of the last blow-up, s.
+    last_blow_up_s: f64,
 }
 
 impl Simulation {
@@ -113,9 +132,16 @@ impl Simulation {
             steps_since_good: 0,
             contact_forces: zeros(),
             dt_limit: Self::explicit_dt_limit(&model),
+            recoveries: 0,
+            last_blow_up_s: f64::NEG_INFINITY,
             model,
             dynamics,
         }
+    }
+
+    /// [`Simulation::explicit_dt_limit`] of the running model (cached).
+    pub fn dt_limit(&self) -> f64 {
+        self.dt_limit
     }
 
     /// Estimated critical time step of symplectic Euler, `2 / omega_max`, from Gershgorin's
@@ -166,8 +192,15 @@ impl Simulation {
         self.good_time = None;
     }
 
-    /// Back to rest (positions and velocities), keeping fixed nodes and loads.
+    /// Back to rest (positions and velocities), keeping fixed nodes and loads; the guard's count
+    /// starts again.
     pub fn reset(&mut self) {
+        self.to_rest();
+        self.recoveries = 0;
+        self.last_blow_up_s = f64::NEG_INFINITY;
+    }
+
+    fn to_rest(&mut self) {
         let grid = self.model.grid;
         for p in 0..grid.num_nodes() {
             let r = grid.position(p);
@@ -193,8 +226,11 @@ impl Simulation {
         };
         self.enforce_contact();
         self.time_s += self.dt;
-        let healthy = stepped.is_ok() && self.healthy();
-        if healthy {
+        let unhealthy = if stepped.is_ok() { self.unhealthy() } else { None };
+        if stepped.is_ok() && unhealthy.is_none() {
+            if self.time_s > self.last_blow_up_s {
+                self.recoveries = 0;
+            }
             self.steps_since_good += 1;
             if self.good_time.is_none() || self.steps_since_good >= 100 {
                 for c in 0..3 {
@@ -207,20 +243,42 @@ impl Simulation {
             return Ok(());
         }
         let limit = self.dt_limit;
-        let message = match (stepped, self.integrator) {
-            (Err(e), _) => format!("the implicit solve failed ({e}); the state was reset"),
-            (Ok(()), Integrator::Symplectic) if self.dt > limit => format!(
+        let dragging = matches!(self.tool, Tool::Drag { .. });
+        let message = match (stepped, self.integrator, unhealthy) {
+            (Err(e), _, _) => format!("the implicit solve failed ({e}); the state was reset"),
+            (Ok(()), Integrator::Symplectic, _) if self.dt > limit => format!(
                 "diverged: symplectic Euler with dt = {:.3e} s is above its stability limit of about {limit:.3e} s \
                  for this stiffness; the state was reset. Lower dt or choose the implicit integrator.",
                 self.dt
             ),
-            (Ok(()), _) => "diverged (non-finite or runaway energy); the state was reset. Lower dt, soften the \
+            (Ok(()), _, Some(Unhealthy::OutsideCube)) if dragging => "a node was pulled more than the cube's side \
+                 (0.1 m) from rest; the state was reset. Drag targets are in metres: keep them near the cube."
+                .to_owned(),
+            (Ok(()), _, Some(Unhealthy::OutsideCube)) => "a node moved more than the cube's side (0.1 m) from rest; \
+                 the state was reset. Lower the loads or dt, or choose the implicit integrator."
+                .to_owned(),
+            (Ok(()), _, _) => "diverged (non-finite or runaway energy); the state was reset. Lower dt, soften the \
                             tool, or choose the implicit integrator."
                 .to_owned(),
         };
         let time_s = self.time_s;
+        if time_s > self.last_blow_up_s {
+            self.last_blow_up_s = time_s;
+        }
+        self.recoveries += 1;
+        let fatal = self.recoveries >= MAX_RECOVERIES;
+        if fatal {
+            self.good_time = None;
+            self.last_blow_up_s = f64::NEG_INFINITY;
+            self.recoveries = 0;
+        }
         self.restore();
-        Err(BlowUp { time_s, message })
+        let message = if fatal {
+            format!("stopped after {MAX_RECOVERIES} blow-ups in a row, back at rest: {message}")
+        } else {
+            message
+        };
+        Err(BlowUp { time_s, message, fatal })
     }
 
     fn restore(&mut self) {
@@ -232,19 +290,33 @@ impl Simulation {
                 }
                 self.time_s = t;
             }
-            None => self.reset(),
+            None => self.to_rest(),
         }
         self.tool = Tool::None;
         self.tool_force = [0.0; 3];
     }
 
-    /// No NaN, nothing flung far away, no absurd kinetic energy.
-    fn healthy(&self) -> bool {
+    /// Why the state is not good, if it is not: a NaN, a node more than the cube's side from
+    /// its rest position (bounded relative to the cube, not to some absolute size), or a kinetic
+    /// energy of the whole mass moving at 10 m/s.
+    fn unhealthy(&self) -> Option<Unhealthy> {
         let l = crate::grid::CUBE_SIDE_M;
         let finite = self.dynamics.x.iter().chain(&self.dynamics.v).all(|c| c.iter().all(|v| v.is_finite()));
-        finite
-            && self.dynamics.x.iter().all(|c| c.iter().all(|v| v.abs() < 20.0 * l))
-            && self.dynamics.kinetic_energy(&self.model) < 1e3
+        if !finite {
+            return Some(Unhealthy::NonFinite);
+        }
+        let grid = self.model.grid;
+        for p in 0..grid.num_nodes() {
+            let r = grid.position(p);
+            if (0..3).any(|c| (self.dynamics.x[c][p] - r[c]).abs() > l) {
+                return Some(Unhealthy::OutsideCube);
+            }
+        }
+        let mass = self.model.node_mass * grid.num_nodes() as f64;
+        if self.dynamics.kinetic_energy(&self.model) > 0.5 * mass * 10.0 * 10.0 {
+            return Some(Unhealthy::Energy);
+        }
+        None
     }
 
     fn apply_tool_load(&mut self) {

@@ -25,7 +25,23 @@ pub enum SparseError {
     /// [`SpdSystem::solve_in_place`] was called before a successful [`SpdSystem::factor`].
     #[error("solve called before a successful factorisation")]
     NotFactored,
+    /// The factor would need more memory than [`MAX_FACTOR_BYTES`] (found by the symbolic
+    /// analysis, before any numeric work).
+    #[error(
+        "the sparse factor of this {n}-unknown system would need {} MB, above the bound of {} MB",
+        bytes >> 20,
+        MAX_FACTOR_BYTES >> 20
+    )]
+    TooLarge {
+        /// Unknowns.
+        n: usize,
+        /// Bytes the factor's values and indices would take.
+        bytes: usize,
+    },
 }
+
+/// Largest sparse factor any solver allocates, bytes.
+pub const MAX_FACTOR_BYTES: usize = 3 << 30;
 
 /// A symmetric matrix stored as its lower triangle (CSC), with its kept symbolic Cholesky.
 pub struct SpdSystem {
@@ -128,6 +144,10 @@ impl SpdSystem {
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
         ]);
+        let bytes = symbolic.len_val().saturating_mul(8 + 4);
+        if bytes > MAX_FACTOR_BYTES {
+            return Err(SparseError::TooLarge { n, bytes });
+        }
         let scratch = MemBuffer::try_new(req).map_err(|_| SparseError::Pattern("out of memory".into()))?;
         let values = vec![0.0; pattern.row_idx().len()];
         let l_values = vec![0.0; symbolic.len_val()];

@@ -227,3 +227,178 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
         assert!(stderr(&o).contains("error:"), "{bad:?}: {}", stderr(&o));
     }
 }
+
+/// Runs the binary with `envs` set and `DISPLAY`-style variables removed where `clear` says.
+fn run_env(args: &[&str], envs: &[(&str, &str)], clear: &[&str]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_tissue-sim"));
+    c.args(args);
+    for k in clear {
+        c.env_remove(k);
+    }
+    for (k, v) in envs {
+        c.env(k, v);
+    }
+    c.output().expect("binary runs")
+}
+
+#[test]
+fn outputs_never_replace_special_files_links_or_protected_files() {
+    use std::os::unix::fs::PermissionsExt as _;
+    let dir = tempfile::tempdir().expect("tempdir");
+    // A link to /dev/null: written through, /dev/null stays a device and the link stays a link.
+    let null = dir.path().join("null.json");
+    std::os::unix::fs::symlink("/dev/null", &null).expect("symlink");
+    let o = run(&["fem", "--object", "A", "--nodes", "3", "--out", null.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::symlink_metadata(&null).expect("meta").file_type().is_symlink());
+    assert!(!std::fs::metadata("/dev/null").expect("meta").is_file());
+    // `-` is standard output.
+    let o = run(&["fem", "--object", "A", "--nodes", "3", "--out", "-"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON on stdout");
+    assert_eq!(v["nodes_per_axis"].as_u64(), Some(3));
+    let o = run(&["fem", "--object", "A", "--nodes", "3", "--out", "/dev/stdout"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON through /dev/stdout");
+    assert_eq!(v["nodes_per_axis"].as_u64(), Some(3));
+    // A write-protected file is refused, even for root.
+    let locked = dir.path().join("locked.json");
+    std::fs::write(&locked, "keep").expect("write");
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o444)).expect("chmod");
+    let o = run(&["fem", "--object", "A", "--nodes", "3", "--out", locked.to_str().expect("utf8")]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("write-protected"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&locked).expect("read"), "keep");
+}
+
+#[test]
+fn bad_input_gets_one_clear_line_and_exit_code_1() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("never.json");
+    let o = out.to_str().expect("utf8");
+    let missing = dir.path().join("missing.toml");
+    let short = dir.path().join("short.toml");
+    std::fs::write(&short, "symmetry = \"orthotropic\"\nE1 = 1.0\n").expect("write");
+    let broken = dir.path().join("broken.toml");
+    std::fs::write(&broken, "symmetry = \"orthotropic\"\nE1 = = 1.0\n").expect("write");
+    let huge = dir.path().join("huge.toml");
+    std::fs::write(
+        &huge,
+        "symmetry = \"orthotropic\"\nunits = \"MPa\"\nE1 = 1e300\nE2 = 0.188\nE3 = 0.228\nnu12 = 0.26\nnu13 = 0.3\n\
+         nu23 = 0.31\nG12 = 0.0571\nG13 = 0.0658\nG23 = 0.0711\n",
+    )
+    .expect("write");
+    let params_b = dir.path().join("params_b.json");
+    std::fs::write(&params_b, r#"{"object":"B","params":{"k1":700,"k2":600,"k3":650,"d":0}}"#).expect("write");
+    let params_x = dir.path().join("params_x.json");
+    std::fs::write(&params_x, r#"{"object":"A","params":{"k1":700,"k2":600,"k3":650,"d":0,"k4":1}}"#).expect("write");
+    let m = |p: &Path| p.to_str().expect("utf8").to_owned();
+    let (missing_s, short_s, broken_s, huge_s) = (m(&missing), m(&short), m(&broken), m(&huge));
+    let (pb, px) = (m(&params_b), m(&params_x));
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["msm", "--object", "A", "--k1", "1e-320", "--k2", "1", "--k3", "1", "--out", o], "k1"),
+        (vec!["msm", "--object", "A", "--k1", "-inf", "--k2", "1", "--k3", "1", "--out", o], "k1"),
+        (vec!["calibrate", "--object", "A", "--mutation", "-0.1", "--out", o], "mutation"),
+        (vec!["calibrate", "--object", "A", "--seed", "-1", "--out", o], "--seed"),
+        (vec!["calibrate", "--object", "A", "--bound", "k1=1e300:1e301", "--out", o], "k1"),
+        (vec!["calibrate", "--object", "A", "--population", "100000", "--generations", "1000", "--out", o], "bound"),
+        (vec!["fem", "--material", &huge_s, "--out", o], "E1"),
+        (vec!["fem", "--material", &short_s, "--out", o], "for an orthotropic material"),
+        (vec!["fem", "--material", &broken_s, "--out", o], "line 2"),
+        (vec!["fem", "--material", &missing_s, "--out", o], "No such file"),
+        (vec!["fem", "--object", "A", "--nodes", "40", "--bc", "patch", "--out", o], "at most"),
+        (vec!["msm", "--object", "A", "--nodes", "41", "--k1", "1", "--k2", "1", "--k3", "1", "--out", o], "at most 40"),
+        (vec!["errors", "--params", &pb], "k3 must equal k2"),
+        (vec!["errors", "--params", &px], "k4"),
+        (vec!["render", "--case", "A_clamped_ax1_F10", "--magnify", "1e30", "--out", o], "magnify"),
+        (vec!["fem", "--object", "A", "--bogus"], "--bogus"),
+    ];
+    for (args, needle) in cases {
+        let r = run(&args);
+        assert_eq!(r.status.code(), Some(1), "{args:?} should exit 1: {}", stderr(&r));
+        let msg = stderr(&r);
+        assert!(msg.contains(needle), "{args:?}: {msg}");
+        assert!(!msg.contains("panicked"), "{args:?}: {msg}");
+        assert!(!out.exists(), "{args:?} left a file");
+        if !msg.contains("For more information") {
+            assert_eq!(msg.trim_end().lines().count(), 1, "{args:?}: one line: {msg}");
+        }
+        assert!(msg.matches("os error").count() <= 1, "{args:?}: the OS error twice: {msg}");
+    }
+    // A window system that does not answer: say so, name the headless commands, no source paths.
+    let r = run_env(&["view", "--frames", "1"], &[("DISPLAY", ":97")], &["WAYLAND_DISPLAY"]);
+    assert_eq!(r.status.code(), Some(1));
+    let msg = stderr(&r);
+    assert!(msg.contains("headless commands") && msg.contains(":97"), "{msg}");
+    assert!(!msg.contains(".cargo") && !msg.contains(".rs:"), "{msg}");
+}
+
+#[test]
+fn simulate_writes_compact_bounded_output_and_stops_on_a_persistent_blow_up() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out.json");
+    let o = run(&["simulate", "--script", "assets/examples/interaction.json", "--out", out.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).expect("written");
+    assert_eq!(text.trim_end().lines().count(), 1, "compact JSON");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let events = v["events"].as_array().expect("events");
+    let with: Vec<bool> = events.iter().map(|e| e.get("positions").is_some()).collect();
+    assert!(with[0] && *with.last().expect("last") && with.iter().filter(|w| **w).count() == 2, "{with:?}");
+    for key in ["object", "model", "integrator", "dt", "nodes_per_axis", "steps", "force_depth", "blow_ups"] {
+        assert!(v.get(key).is_some(), "key {key}");
+    }
+    // A blow-up that persists: a 1e9 N load. One message, exit 1, no output.
+    let script = dir.path().join("blow.json");
+    std::fs::write(
+        &script,
+        r#"{"object":"A","clamp":"A_clamped_ax3_F1000000000","integrator":"prefactored","actions":[{"wait":{"duration_s":1.0}}]}"#,
+    )
+    .expect("write");
+    let never = dir.path().join("never.json");
+    let o = run(&["simulate", "--script", script.to_str().expect("utf8"), "--out", never.to_str().expect("utf8")]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{}", stderr(&o));
+    assert!(stderr(&o).contains("blow-ups in a row"), "{}", stderr(&o));
+    assert!(!never.exists());
+}
+
+#[test]
+fn chart_files_are_checked_and_an_interrupted_chart_leaves_no_directory() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(
+        &bad,
+        "object,model,n,integrator,step_s,dt_max_s,static_s,memory_bytes,avg_err_pct,max_err_pct,pareto\n\
+         A,msm-axis,4,explicit,-7,1e-3,1e-3,100,0.5,1.0,true\n",
+    )
+    .expect("write");
+    let o = run(&["choose", "--chart", bad.to_str().expect("utf8"), "--max-error", "5"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("step_s"), "{}", stderr(&o));
+    // Interrupted while computing: nothing appears at --out.
+    let out = dir.path().join("chart");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tissue-sim"))
+        .args(["chart", "--out", out.to_str().expect("utf8"), "--objects", "A", "--resolutions", "4"])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("spawn");
+    std::thread::sleep(std::time::Duration::from_millis(800));
+    child.kill().expect("kill");
+    let _ = child.wait();
+    assert!(!out.exists(), "an interrupted chart left {}", out.display());
+}
+
+#[test]
+fn the_readme_examples_run() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("x.json");
+    let o = out.to_str().expect("utf8");
+    for args in [
+        vec!["fem", "--material", "assets/examples/my_tissue.toml", "--bc", "patch", "--out", o],
+        vec!["errors", "--params", "assets/examples/calibration.json", "--json"],
+    ] {
+        let r = run(&args);
+        assert!(r.status.success(), "{args:?}: {}", stderr(&r));
+    }
+}

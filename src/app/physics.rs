@@ -56,6 +56,12 @@ pub struct Published {
     pub integrator: Option<(Integrator, f64)>,
     /// How many tool commands have been applied (to measure input-to-photon latency).
     pub tool_commands: u64,
+    /// Ticks since the thread started.
+    pub ticks_total: u64,
+    /// Steps since the thread started.
+    pub steps_total: u64,
+    /// Wall time since the thread started, s.
+    pub running_s: f64,
 }
 
 /// Handle to the running physics thread; stops and joins it on drop.
@@ -91,6 +97,7 @@ impl PhysicsThread {
             into.steps_per_s = p.steps_per_s;
             into.step_us = p.step_us;
             into.realtime = p.realtime;
+            (into.ticks_total, into.steps_total, into.running_s) = (p.ticks_total, p.steps_total, p.running_s);
             into.tool_force = p.tool_force;
             into.message.clone_from(&p.message);
             into.integrator = p.integrator;
@@ -144,9 +151,13 @@ fn run(mut sim: Simulation, rx: &Receiver<Option<Command>>, out: &Mutex<Publishe
     // Simulated time owed to the wall clock.
     let mut owed = 0.0f64;
     let mut tools = 0u64;
+    // After the guard gives up (a fatal blow-up) stepping pauses until the user acts.
+    let mut paused = false;
+    let (mut ticks_total, mut steps_total) = (0u64, 0u64);
     loop {
         while let Ok(cmd) = rx.try_recv() {
             let Some(cmd) = cmd else { return };
+            paused = false;
             match cmd {
                 Command::SetParams(p) => {
                     if let Err(e) = sim.set_params(p) {
@@ -188,17 +199,27 @@ fn run(mut sim: Simulation, rx: &Receiver<Option<Command>>, out: &Mutex<Publishe
         let t0 = Instant::now();
         // Catch up at most 20 ticks' worth, so a slow machine falls behind instead of spiralling.
         owed = owed.min(20.0 * TICK.as_secs_f64());
-        while owed >= sim.dt * 0.999 {
+        while !paused && owed >= sim.dt * 0.999 {
             if let Err(b) = sim.step() {
-                message = Some(format!("t = {:.3} s: {}", b.time_s, b.message));
+                message = Some(if b.fatal {
+                    format!("t = {:.3} s: {} Paused: change a setting, use a tool or Reset to go on.", b.time_s, b.message)
+                } else {
+                    format!("t = {:.3} s: {}", b.time_s, b.message)
+                });
+                paused = b.fatal;
                 owed = 0.0;
                 break;
             }
             owed -= sim.dt;
             steps += 1;
+            steps_total += 1;
+        }
+        if paused {
+            owed = 0.0;
         }
         busy += t0.elapsed();
         ticks += 1;
+        ticks_total += 1;
         let elapsed = window_start.elapsed();
         if elapsed >= Duration::from_secs(1) {
             let secs = elapsed.as_secs_f64();
@@ -211,6 +232,9 @@ fn run(mut sim: Simulation, rx: &Receiver<Option<Command>>, out: &Mutex<Publishe
             (window_start, ticks, steps, busy, sim_at_window) = (Instant::now(), 0, 0, Duration::ZERO, sim.time_s);
         }
         publish(&sim, out, stats, &message, tools);
+        if let Ok(mut p) = out.lock() {
+            (p.ticks_total, p.steps_total, p.running_s) = (ticks_total, steps_total, start.elapsed().as_secs_f64());
+        }
         next += TICK;
         let now = Instant::now();
         if next > now {

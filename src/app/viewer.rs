@@ -1071,11 +1071,27 @@ impl ApplicationHandler for App {
 
 /// Opens the window and runs until it closes.
 pub fn run(frames: Option<u64>, screenshot: Option<std::path::PathBuf>) -> anyhow::Result<()> {
-    let event_loop = EventLoop::new().context("cannot open the windowing system")?;
+    // winit's own message names its source files; say what is wrong in the user's terms.
+    let event_loop = EventLoop::new().map_err(|_| {
+        let display = std::env::var("DISPLAY").or_else(|_| std::env::var("WAYLAND_DISPLAY")).unwrap_or_default();
+        anyhow::anyhow!(
+            "cannot open the display {display:?}: no window system answers there (is an X server or Wayland \
+             compositor running?); {}",
+            super::HEADLESS_HINT
+        )
+    })?;
     let mut app = App::new(frames, screenshot)?;
     event_loop.run_app(&mut app).context("event loop failed")?;
     if let Some(e) = app.error.take() {
         return Err(e);
+    }
+    if app.max_frames.is_some() {
+        let p = &app.latest;
+        let rate = if p.running_s > 0.0 { p.ticks_total as f64 / p.running_s } else { 0.0 };
+        eprintln!(
+            "viewer: {} frames; physics {} ticks and {} steps in {:.2} s ({rate:.0} ticks/s)",
+            app.frames, p.ticks_total, p.steps_total, p.running_s
+        );
     }
     if let Some(path) = app.screenshot.clone() {
         // The smoke test's screenshot: the same scene through the offscreen path.

@@ -107,6 +107,22 @@ impl GeneSpace {
         if name.starts_with('k') && lo <= 0.0 {
             return Err(format!("the lower bound of {name} must be positive (an axis spring needs stiffness)"));
         }
+        let (min, max) = crate::msm::model::STIFFNESS_RANGE;
+        if name == "d" {
+            if hi > max {
+                return Err(format!(
+                    "bounds of d must lie within 0 to {max:e} N s/m, got {}:{}",
+                    crate::io::num(lo),
+                    crate::io::num(hi)
+                ));
+            }
+        } else if (lo != 0.0 && lo < min) || hi > max {
+            return Err(format!(
+                "bounds of {name} must lie within {min:e} to {max:e} N/m (or start at 0), got {}:{}",
+                crate::io::num(lo),
+                crate::io::num(hi)
+            ));
+        }
         self.lo[i] = lo;
         self.hi[i] = hi;
         Ok(())

@@ -48,6 +48,9 @@ pub enum CostMode {
     Transient,
 }
 
+/// Largest `population x generations` of one run (the paper's is 5000).
+pub const MAX_EVALUATIONS: usize = 2_000_000;
+
 /// Settings of a calibration run (defaults: the paper's).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Settings {
@@ -95,6 +98,12 @@ impl Settings {
         }
         if self.generations == 0 || self.generations > 1_000_000 {
             return Err(format!("generations must be in 1..=1000000, got {}", self.generations));
+        }
+        if self.population * self.generations > MAX_EVALUATIONS {
+            return Err(format!(
+                "population x generations = {} is above the bound of {MAX_EVALUATIONS} evaluations per run",
+                self.population * self.generations
+            ));
         }
         for (name, p) in [("mutation", self.mutation), ("crossover", self.crossover)] {
             if !(0.0..=1.0).contains(&p) {

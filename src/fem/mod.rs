@@ -108,10 +108,20 @@ impl FemModel {
     /// (one numeric factorisation per loaded axis), others with the general [`StaticSolver`]
     /// (one numeric factorisation per set of fixed degrees of freedom).
     pub fn solve_cases(&self, cases: &[LoadCase]) -> Result<Vec<CaseSolution>, SparseError> {
+        self.solve_cases_with_progress(cases, &mut |_, _| {})
+    }
+
+    /// [`FemModel::solve_cases`], calling `progress(i, case id)` before case `i`.
+    pub fn solve_cases_with_progress(
+        &self,
+        cases: &[LoadCase],
+        progress: &mut dyn FnMut(usize, &str),
+    ) -> Result<Vec<CaseSolution>, SparseError> {
         let mut clamped: Option<clamped::ClampedSolver> = None;
         let mut general: Option<StaticSolver> = None;
         let mut out = Vec::with_capacity(cases.len());
-        for case in cases {
+        for (i, case) in cases.iter().enumerate() {
+            progress(i, &case.id);
             let sol = if case.bc == crate::cases::Bc::Clamped {
                 let solver = match &mut clamped {
                     Some(s) => s,

@@ -6,7 +6,7 @@ use crate::grid::{Grid, SpringFamily, axis_families, body_diagonal_families, fac
 #[derive(Debug, thiserror::Error)]
 pub enum ParamError {
     /// A parameter is NaN, infinite or out of its range.
-    #[error("MSM parameter {name} = {value} is invalid: {why}")]
+    #[error("MSM parameter {name} = {} is invalid: {why}", crate::io::num(*value))]
     Invalid {
         /// Parameter name, e.g. `k1`.
         name: &'static str,
@@ -46,6 +46,7 @@ impl Topology {
 
 /// MSM parameters: spring stiffness per family (N/m) and nodal damping (N s/m).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MsmParams {
     /// Stiffness of springs along axis 1 (x), N/m.
     pub k1: f64,
@@ -90,19 +91,21 @@ impl MsmParams {
     /// Checks ranges: axis stiffness positive, diagonal stiffness and damping non-negative, all finite.
     pub fn validate(&self) -> Result<(), ParamError> {
         let bad = |name, value, why| Err(ParamError::Invalid { name, value, why });
+        let in_range = |v: f64| (STIFFNESS_RANGE.0..=STIFFNESS_RANGE.1).contains(&v);
         for (name, v) in [("k1", self.k1), ("k2", self.k2), ("k3", self.k3)] {
-            if !v.is_finite() || v <= 0.0 {
-                return bad(name, v, "a spring stiffness must be a positive finite number (N/m)");
+            if !in_range(v) {
+                return bad(name, v, "a spring stiffness must be a finite number from 1e-6 to 1e10 N/m");
             }
         }
-        if !self.d.is_finite() || self.d < 0.0 {
-            return bad("d", self.d, "damping must be a non-negative finite number (N s/m)");
+        if !self.d.is_finite() || self.d < 0.0 || self.d > 1e10 {
+            return bad("d", self.d, "damping must be a finite number from 0 to 1e10 N s/m");
         }
         for (name, v) in [("c12", self.c12), ("c13", self.c13), ("c23", self.c23), ("b", self.b)] {
             if let Some(v) = v
-                && (!v.is_finite() || v < 0.0)
+                && v != 0.0
+                && !in_range(v)
             {
-                return bad(name, v, "a diagonal stiffness must be a non-negative finite number (N/m)");
+                return bad(name, v, "a diagonal stiffness must be 0 or a finite number from 1e-6 to 1e10 N/m");
             }
         }
         if let Some(b) = self.b
@@ -112,7 +115,34 @@ impl MsmParams {
         }
         Ok(())
     }
+
+    /// The ties of a transversely isotropic material (axis 1 distinct): `k3 = k2` and, where
+    /// face diagonals are set, `c13 = c12`. Orthotropic materials have no ties.
+    pub fn check_ties(&self, transversely_isotropic: bool) -> Result<(), ParamError> {
+        if !transversely_isotropic {
+            return Ok(());
+        }
+        if self.k3 != self.k2 {
+            return Err(ParamError::Invalid {
+                name: "k3",
+                value: self.k3,
+                why: "the material is transversely isotropic (axis 1 distinct): k3 must equal k2",
+            });
+        }
+        if self.c13 != self.c12 {
+            return Err(ParamError::Invalid {
+                name: "c13",
+                value: self.c13.unwrap_or(f64::NAN),
+                why: "the material is transversely isotropic (axis 1 distinct): c13 must equal c12",
+            });
+        }
+        Ok(())
+    }
 }
+
+/// The range of a spring stiffness, N/m: below it forces of a newton give displacements beyond
+/// floating point, above it no soft tissue (and no stable step) lies.
+pub const STIFFNESS_RANGE: (f64, f64) = (1e-6, 1e10);
 
 /// One spring family laid out for the force loop: pairs `(lo + p, lo + p + s)` for `p` in
 /// `0..stiffness.len()`, with `stiffness[p] = 0` where the lattice partner is outside the grid.

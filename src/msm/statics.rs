@@ -46,7 +46,8 @@ pub enum StaticError {
 /// Newton solver settings.
 #[derive(Debug, Clone, Copy)]
 pub struct NewtonOptions {
-    /// Convergence: `|residual| <= rel_tol |f_ext|` (Euclidean norms over free dofs).
+    /// Convergence: `|residual| <= rel_tol |f_ext|` (Euclidean norms over free dofs), or the
+    /// round-off floor of the spring forces at this size where that is larger.
     pub rel_tol: f64,
     /// Iteration limit.
     pub max_iterations: usize,
@@ -196,7 +197,8 @@ pub fn solve_newton_with(
     let mut trial = x.clone();
     let mut g_trial = g.clone();
     let mut refactor = !(opts.chord && tangent.system.is_factored());
-    while r_norm > opts.rel_tol * f_norm {
+    let tol = opts.rel_tol.max(roundoff_floor(model, &free) / f_norm) * f_norm;
+    while r_norm > tol {
         if report.iterations >= opts.max_iterations {
             return Err(StaticError::NotConverged {
                 case: case.id.clone(),
@@ -257,6 +259,16 @@ pub fn solve_newton_with(
     Ok((u, report))
 }
 
+/// The smallest residual norm round-off lets the spring forces reach: each spring force is
+/// `k (|x_b - x_a| - l0)` with positions of the cube's size, so it carries an error of about
+/// `eps k L`; over the free degrees of freedom these add like `sqrt(dofs)` times a node's total
+/// stiffness (the tangent's mean diagonal). At 8^3 this lies below the default tolerance; at
+/// 24^3 and above it does not, and a fixed relative tolerance would never be met.
+fn roundoff_floor(model: &MsmModel, free: &[bool]) -> f64 {
+    let dofs = 3 * free.iter().filter(|f| **f).count();
+    f64::EPSILON * mean_diagonal(model) * crate::grid::CUBE_SIDE_M * (dofs as f64).sqrt()
+}
+
 /// Mean diagonal of the small-displacement tangent: sum over springs touching a node of `k`,
 /// per dof, averaged — a scale for the Levenberg-Marquardt shift.
 fn mean_diagonal(model: &MsmModel) -> f64 {
@@ -266,9 +278,20 @@ fn mean_diagonal(model: &MsmModel) -> f64 {
 
 /// Static equilibrium of each case: the closed form where it applies, Newton otherwise.
 pub fn solve_cases(model: &MsmModel, cases: &[LoadCase]) -> Result<Vec<CaseSolution>, StaticError> {
+    solve_cases_with_progress(model, cases, &mut |_, _| {})
+}
+
+/// [`solve_cases`], calling `progress(i, case id)` before case `i`.
+pub fn solve_cases_with_progress(
+    model: &MsmModel,
+    cases: &[LoadCase],
+    progress: &mut dyn FnMut(usize, &str),
+) -> Result<Vec<CaseSolution>, StaticError> {
     cases
         .iter()
-        .map(|case| {
+        .enumerate()
+        .map(|(i, case)| {
+            progress(i, &case.id);
             let displacements = equilibrium(model, case)?;
             Ok(CaseSolution {
                 case_id: case.id.clone(),

@@ -10,12 +10,11 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use anyhow::Context as _;
 
 use crate::accuracy::{CaseError, case_errors, format_table};
 use crate::calibrate::{CalibrationResult, GeneSpace, Method, Problem, Settings, Workspace, calibrate};
 use crate::grid::Grid;
-use crate::io::{write_atomic, write_json_atomic};
+use crate::io::OutputDir;
 use crate::material::Material;
 use crate::msm::{MsmParams, Topology};
 use plot::{Series, line_panels};
@@ -108,7 +107,8 @@ fn mean_sd(v: &[f64]) -> (f64, f64) {
 
 /// Runs everything and writes `dir/report.md`, the figures and the data.
 pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    OutputDir::check(dir)?;
+    let mut files = OutputDir::default();
     let start = Instant::now();
     let grid = Grid::paper();
     let never = AtomicBool::new(false);
@@ -225,8 +225,8 @@ pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
             ],
         )?;
         let fig_name = format!("fig{fig}_object_{name}.svg");
-        write_atomic(&dir.join(&fig_name), svg.as_bytes())?;
-        write_atomic(&dir.join(format!("fig{fig}_object_{name}.csv")), csv.as_bytes())?;
+        files.add(fig_name.clone(), svg);
+        files.add(format!("fig{fig}_object_{name}.csv"), csv);
         let _ = writeln!(md, "\n![Fig. {fig}]({fig_name})\n");
         // Bounds study: the hybrid with wider boxes.
         let _ = writeln!(
@@ -314,7 +314,9 @@ pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
          Total wall time of this report: {:.1} s.",
         start.elapsed().as_secs_f64()
     );
-    write_atomic(&dir.join("report.md"), md.as_bytes())?;
-    write_json_atomic(&dir.join("results.json"), &all_results)?;
-    Ok(())
+    files.add("report.md", md);
+    let mut json = serde_json::to_string_pretty(&all_results)?;
+    json.push('\n');
+    files.add("results.json", json);
+    files.commit(dir)
 }
