@@ -31,9 +31,9 @@ use serde::{Deserialize, Serialize};
 use crate::cases::{LoadCase, parse_case_id};
 use crate::grid::Grid;
 use crate::material::Material;
-use crate::msm::{MsmModel, Topology};
+use crate::msm::Topology;
 use crate::scene::tissue_params;
-use crate::sim::{Integrator, Simulation, Tool};
+use crate::sim::{Integrator, MsmTissue, Simulation, Tissue as _, Tool, choose_integrator};
 
 /// A script.
 #[derive(Debug, Clone, Deserialize)]
@@ -255,16 +255,10 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         anyhow::bail!("script: {recorded} actions record positions, above the bound of {MAX_RECORDED}");
     }
     let params = tissue_params(&material, script.model)?;
-    let model = MsmModel::new(grid, params, material.density)?;
-    let limit = Simulation::explicit_dt_limit(&model);
-    let integrator = script.integrator.unwrap_or_else(|| Simulation::integrator_for(script.dt, limit));
-    if integrator == Integrator::Symplectic && script.dt > limit {
-        anyhow::bail!(
-            "script: symplectic Euler at dt = {:e} s is above its stability limit of about {limit:.3e} s for this \
-             tissue; lower dt, or choose \"integrator\": \"prefactored\" (or leave it out)",
-            script.dt
-        );
-    }
+    let tissue = MsmTissue::build(params, material.density)?;
+    let integrator = choose_integrator(script.integrator, script.dt, tissue.explicit_dt_limit()).map_err(|why| {
+        anyhow::anyhow!("script: {why}; lower dt, or choose \"integrator\": \"prefactored\" (or leave it out)")
+    })?;
     let case: Option<LoadCase> = match script.clamp.as_str() {
         "none" => None,
         "bottom" => {
@@ -282,7 +276,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
             Some(case)
         }
     };
-    let mut sim = Simulation::new(model, integrator, script.dt, case.as_ref());
+    let mut sim = Simulation::with_tissue(Box::new(tissue), integrator, script.dt, case.as_ref());
     let rest = grid.positions();
     let mut out = Outcome {
         object: material.name.clone(),
@@ -339,7 +333,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
                     anyhow::bail!("script: action {i}: node {node} does not exist (0..{})", grid.num_nodes());
                 }
                 check_point(&format!("action {i}: drag target \"to\""), to)?;
-                let from: [f64; 3] = std::array::from_fn(|c| sim.dynamics.x[c][*node]);
+                let from: [f64; 3] = std::array::from_fn(|c| sim.tissue.x()[c][*node]);
                 let n = steps_for(*duration_s)?.max(1);
                 for s in 1..=n {
                     let f = s as f64 / n as f64;
@@ -393,7 +387,8 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
                 }
             }
         }
-        let position = |p: usize| -> [f64; 3] { std::array::from_fn(|c| sim.dynamics.x[c][p]) };
+        let x = sim.tissue.x();
+        let position = |p: usize| -> [f64; 3] { std::array::from_fn(|c| x[c][p]) };
         let max_displacement_m = rest
             .iter()
             .enumerate()

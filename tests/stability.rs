@@ -61,14 +61,14 @@ fn explicit_is_bounded_at_0_9_dt_crit_and_diverges_at_1_2_dt_crit_with_the_guard
     let mut worst = 0.0f64;
     for i in 0..20_000 {
         sim.step().unwrap_or_else(|b| panic!("step {i} at 0.9 dt_crit blew up: {}", b.message));
-        worst = worst.max(sim.dynamics.displacements(&sim.model).iter().flatten().fold(0.0f64, |m, v| m.max(v.abs())));
+        worst = worst.max(sim.displacements().iter().flatten().fold(0.0f64, |m, v| m.max(v.abs())));
     }
     assert!(worst < 5e-3, "largest displacement {worst} m at 0.9 dt_crit");
     // Above: the guard catches the divergence, restores a good state and says why.
     let mut sim = Simulation::new(model, Integrator::Symplectic, 1.2 * dt_crit, Some(&case));
     let blow_up = (0..2000).find_map(|_| sim.step().err()).expect("1.2 dt_crit must diverge within 2000 steps");
     assert!(blow_up.message.contains("stability limit"), "{}", blow_up.message);
-    assert!(sim.dynamics.x.iter().flatten().all(|v| v.is_finite()), "state restored");
+    assert!(sim.tissue.x().iter().flatten().all(|v| v.is_finite()), "state restored");
 }
 
 #[test]

@@ -1,11 +1,24 @@
 //! The interactive viewer: a winit window with a wgpu view of the cube and an egui side panel.
-//! Physics runs on its own thread ([`physics`]); calibration runs on a background thread
-//! ([`calibration`]); the UI thread only draws and forwards input.
+//!
+//! - [`viewer`]: the event loop and the frame; [`surface`]: the window and its wgpu surface.
+//! - [`state`]: the window-free viewer state, which turns [`state::Request`]s into physics
+//!   commands, over what [`settings`] holds; [`panel`]: the side panel, a file per section; [`tools`]: mouse gestures;
+//!   [`overlay`]: colour scalar, legend and lines, once per frame.
+//! - Threads, all [`worker::Worker`]s: [`physics`] (steps the simulation), [`calibration`], the
+//!   chart of [`study_panel`], and the FEM answer of a load case. The UI thread only draws and
+//!   forwards input.
 
 pub mod calibration;
+pub mod overlay;
+pub mod panel;
 pub mod physics;
+pub mod settings;
+pub mod state;
 pub mod study_panel;
+pub mod surface;
+pub mod tools;
 pub mod viewer;
+pub mod worker;
 
 /// The headless commands, named when there is no display.
 pub const HEADLESS_HINT: &str = "headless commands: render, simulate, fem, msm, errors, calibrate, reproduce, chart, choose, bench \

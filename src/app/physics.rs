@@ -1,34 +1,70 @@
 //! The physics thread: steps the [`Simulation`] at a fixed time step, kept in step with the wall
 //! clock in 1 ms ticks (substeps when `dt` is smaller), and publishes the latest state. The
-//! renderer copies it under a briefly held lock; the viewer never steps the physics.
+//! renderer copies it under a briefly held lock; the viewer never steps the physics, and never
+//! builds a model: a new tissue is built here, from the recipe the UI sends.
 
-use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 use std::sync::{Arc, Mutex};
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use super::worker::{Context, State, Worker};
 use crate::cases::LoadCase;
 use crate::msm::MsmParams;
-use crate::sim::{Integrator, Simulation, Tool};
+use crate::sim::{Integrator, Simulation, Tissue, Tool};
 
 /// Wall-clock length of one physics tick.
 pub const TICK: Duration = Duration::from_millis(1);
+
+/// Builds a tissue model (on the physics thread).
+pub type TissueRecipe = Box<dyn FnOnce() -> Result<Box<dyn Tissue>, String> + Send>;
+
+/// A whole new simulation: the model's recipe, the integrator asked for (`None`: automatic),
+/// the step and the clamp.
+pub struct Replacement {
+    /// Builds the model.
+    pub recipe: TissueRecipe,
+    /// Integrator asked for.
+    pub integrator: Option<Integrator>,
+    /// Time step, s.
+    pub dt: f64,
+    /// Fixed nodes and loads.
+    pub case: LoadCase,
+}
+
+impl std::fmt::Debug for Replacement {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Replacement").field("integrator", &self.integrator).field("dt", &self.dt).finish()
+    }
+}
 
 /// Requests to the physics thread.
 #[derive(Debug)]
 pub enum Command {
     /// New parameters, applied live.
     SetParams(MsmParams),
-    /// Integrator and time step.
-    SetIntegrator(Integrator, f64),
+    /// Integrator asked for (`None`: automatic) and time step; the simulation's policy decides.
+    SetIntegrator(Option<Integrator>, f64),
     /// The active tool.
     SetTool(Tool),
-    /// Clamp and load as a benchmark case (or free and unloaded with `None`).
-    ApplyCase(Option<LoadCase>),
+    /// Clamp and load as a case, keeping the state.
+    ApplyCase(LoadCase),
     /// Back to rest.
     Reset,
     /// Replace the whole simulation (another object or model).
-    Replace(Box<Simulation>),
+    Replace(Replacement),
+}
+
+/// How fast the physics runs, over the last wall-clock second.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Rates {
+    /// Ticks completed per second (target: 1000).
+    pub ticks_per_s: f64,
+    /// Steps completed per second.
+    pub steps_per_s: f64,
+    /// Mean compute time of one step, microseconds.
+    pub step_us: f64,
+    /// Simulated seconds per wall second (1.0 = real time).
+    pub realtime: f64,
 }
 
 /// What the physics thread publishes.
@@ -40,20 +76,22 @@ pub struct Published {
     pub fixed: Vec<bool>,
     /// Simulated time, s.
     pub time_s: f64,
-    /// Ticks completed in the last wall-clock second (target: 1000).
-    pub ticks_per_s: f64,
-    /// Steps completed in the last wall-clock second.
-    pub steps_per_s: f64,
-    /// Mean compute time of one step, microseconds.
-    pub step_us: f64,
-    /// Simulated seconds per wall second over the last second (1.0 = real time).
-    pub realtime: f64,
+    /// Rates over the last second.
+    pub rates: Rates,
     /// Force of the tissue on the tool, newtons.
     pub tool_force: [f64; 3],
     /// The last blow-up message, if any.
     pub message: Option<String>,
+    /// The last note on a request (an integrator switched by the policy, parameters refused).
+    pub note: Option<String>,
     /// Integrator and dt in use.
     pub integrator: Option<(Integrator, f64)>,
+    /// The explicit stability limit of the running model, s.
+    pub dt_limit: f64,
+    /// The running model's parameters.
+    pub params: Option<MsmParams>,
+    /// Whether anything moves (a tool is active or a node is not at rest): the UI redraws then.
+    pub moving: bool,
     /// How many tool commands have been applied (to measure input-to-photon latency).
     pub tool_commands: u64,
     /// Ticks since the thread started.
@@ -64,12 +102,17 @@ pub struct Published {
     pub running_s: f64,
 }
 
+/// The physics thread died (the channel is closed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("the physics thread has stopped")]
+pub struct Stopped;
+
 /// Handle to the running physics thread; stops and joins it on drop.
 #[derive(Debug)]
 pub struct PhysicsThread {
-    tx: Sender<Option<Command>>,
+    tx: Sender<Command>,
     shared: Arc<Mutex<Published>>,
-    handle: Option<JoinHandle<()>>,
+    worker: Worker<()>,
 }
 
 impl PhysicsThread {
@@ -78,13 +121,22 @@ impl PhysicsThread {
         let (tx, rx) = channel();
         let shared = Arc::new(Mutex::new(Published::default()));
         let out = Arc::clone(&shared);
-        let handle = std::thread::Builder::new().name("physics".into()).spawn(move || run(sim, &rx, &out))?;
-        Ok(Self { tx, shared, handle: Some(handle) })
+        let worker = Worker::spawn("physics", || {}, move |ctx| run(sim, &rx, &out, ctx))?;
+        Ok(Self { tx, shared, worker })
     }
 
-    /// Sends a command (ignored if the thread has stopped).
-    pub fn send(&self, c: Command) {
-        let _ = self.tx.send(Some(c));
+    /// Sends a command; fails once the thread has stopped.
+    pub fn send(&self, c: Command) -> Result<(), Stopped> {
+        self.tx.send(c).map_err(|_| Stopped)
+    }
+
+    /// `None` while the thread runs; why it ended otherwise.
+    pub fn poll(&mut self) -> Option<String> {
+        match self.worker.poll(|()| {}) {
+            State::Running => None,
+            State::Finished => Some("the physics thread has ended".into()),
+            State::Stopped(why) => Some(format!("the physics thread stopped unexpectedly: {why}")),
+        }
     }
 
     /// Copies the latest published state into `into` (reusing its buffers).
@@ -93,129 +145,130 @@ impl PhysicsThread {
             into.positions.clone_from(&p.positions);
             into.fixed.clone_from(&p.fixed);
             into.time_s = p.time_s;
-            into.ticks_per_s = p.ticks_per_s;
-            into.steps_per_s = p.steps_per_s;
-            into.step_us = p.step_us;
-            into.realtime = p.realtime;
+            into.rates = p.rates;
             (into.ticks_total, into.steps_total, into.running_s) = (p.ticks_total, p.steps_total, p.running_s);
             into.tool_force = p.tool_force;
-            into.message.clone_from(&p.message);
+            if into.message != p.message {
+                into.message.clone_from(&p.message);
+            }
+            if into.note != p.note {
+                into.note.clone_from(&p.note);
+            }
             into.integrator = p.integrator;
+            into.dt_limit = p.dt_limit;
+            into.params = p.params;
+            into.moving = p.moving;
             into.tool_commands = p.tool_commands;
         }
     }
 }
 
-impl Drop for PhysicsThread {
-    fn drop(&mut self) {
-        let _ = self.tx.send(None);
-        if let Some(h) = self.handle.take() {
-            let _ = h.join();
+/// The loop's own bookkeeping.
+struct Loop {
+    message: Option<String>,
+    note: Option<String>,
+    tools: u64,
+    /// After the guard gives up (a fatal blow-up) stepping pauses until the user acts.
+    paused: bool,
+    owed: f64,
+}
+
+impl Loop {
+    fn apply(&mut self, sim: &mut Simulation, cmd: Command) {
+        self.paused = false;
+        match cmd {
+            Command::SetParams(p) => {
+                if let Err(e) = sim.set_params(p) {
+                    self.note = Some(format!("parameters refused: {e}"));
+                }
+            }
+            Command::SetIntegrator(i, dt) => self.note = sim.set_integrator(i, dt),
+            Command::SetTool(t) => {
+                sim.tool = t;
+                self.tools += 1;
+            }
+            Command::ApplyCase(c) => sim.apply_case(&c),
+            Command::Reset => {
+                sim.reset();
+                self.message = None;
+            }
+            Command::Replace(r) => match (r.recipe)() {
+                Ok(tissue) => {
+                    *sim = Simulation::with_tissue(tissue, Integrator::Symplectic, r.dt, Some(&r.case));
+                    self.note = sim.set_integrator(r.integrator, r.dt);
+                    self.message = None;
+                    self.owed = 0.0;
+                }
+                Err(e) => self.note = Some(format!("cannot build the model: {e}")),
+            },
         }
     }
 }
 
-fn publish(
-    sim: &Simulation,
-    out: &Mutex<Published>,
-    stats: (f64, f64, f64, f64),
-    message: &Option<String>,
-    tools: u64,
-) {
+fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop, totals: (u64, u64, f64)) {
     if let Ok(mut p) = out.lock() {
-        let n = sim.model.grid.num_nodes();
+        let n = sim.tissue.grid().num_nodes();
         p.positions.resize(n, [0.0; 3]);
         sim.positions_f32(&mut p.positions);
         p.fixed.resize(n, false);
-        for (f, free) in p.fixed.iter_mut().zip(&sim.dynamics.free) {
+        for (f, free) in p.fixed.iter_mut().zip(sim.tissue.free()) {
             *f = *free == 0.0;
         }
         p.time_s = sim.time_s;
-        (p.ticks_per_s, p.steps_per_s, p.step_us, p.realtime) = stats;
+        p.rates = rates;
         p.tool_force = sim.tool_force;
-        if p.message != *message {
-            p.message.clone_from(message);
+        if p.message != state.message {
+            p.message.clone_from(&state.message);
+        }
+        if p.note != state.note {
+            p.note.clone_from(&state.note);
         }
         p.integrator = Some((sim.integrator, sim.dt));
-        p.tool_commands = tools;
+        p.dt_limit = sim.dt_limit();
+        p.params = sim.tissue.params();
+        p.moving = !state.paused && (sim.tool != Tool::None || sim.tissue.kinetic_energy() > 1e-12);
+        p.tool_commands = state.tools;
+        (p.ticks_total, p.steps_total, p.running_s) = totals;
     }
 }
 
-fn run(mut sim: Simulation, rx: &Receiver<Option<Command>>, out: &Mutex<Published>) {
+fn run(mut sim: Simulation, rx: &Receiver<Command>, out: &Mutex<Published>, ctx: &Context<()>) {
     let start = Instant::now();
     let mut next = start;
-    let mut message: Option<String> = None;
+    let mut state = Loop { message: None, note: None, tools: 0, paused: false, owed: 0.0 };
     let (mut window_start, mut ticks, mut steps, mut busy) = (Instant::now(), 0u64, 0u64, Duration::ZERO);
     let mut sim_at_window = sim.time_s;
-    let mut stats = (0.0, 0.0, 0.0, 0.0);
-    // Simulated time owed to the wall clock.
-    let mut owed = 0.0f64;
-    let mut tools = 0u64;
-    // After the guard gives up (a fatal blow-up) stepping pauses until the user acts.
-    let mut paused = false;
+    let mut rates = Rates::default();
     let (mut ticks_total, mut steps_total) = (0u64, 0u64);
-    loop {
-        while let Ok(cmd) = rx.try_recv() {
-            let Some(cmd) = cmd else { return };
-            paused = false;
-            match cmd {
-                Command::SetParams(p) => {
-                    if let Err(e) = sim.set_params(p) {
-                        message = Some(format!("parameters refused: {e}"));
-                    }
-                }
-                Command::SetIntegrator(i, dt) => {
-                    sim.integrator = i;
-                    sim.dt = dt;
-                }
-                Command::SetTool(t) => {
-                    sim.tool = t;
-                    tools += 1;
-                }
-                Command::ApplyCase(Some(c)) => sim.apply_case(&c),
-                Command::ApplyCase(None) => {
-                    let free = LoadCase {
-                        id: "free".into(),
-                        bc: crate::cases::Bc::Clamped,
-                        axis: 1,
-                        force_n: 0.0,
-                        fixed: vec![false; 3 * sim.model.grid.num_nodes()],
-                        load: vec![0.0; 3 * sim.model.grid.num_nodes()],
-                    };
-                    sim.apply_case(&free);
-                }
-                Command::Reset => {
-                    sim.reset();
-                    message = None;
-                }
-                Command::Replace(s) => {
-                    sim = *s;
-                    message = None;
-                    owed = 0.0;
-                }
+    while !ctx.cancelled() {
+        loop {
+            match rx.try_recv() {
+                Ok(cmd) => state.apply(&mut sim, cmd),
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => return,
             }
         }
-        owed += TICK.as_secs_f64();
+        // Simulated time owed to the wall clock; catch up at most 20 ticks' worth, so a slow
+        // machine falls behind instead of spiralling.
+        state.owed = (state.owed + TICK.as_secs_f64()).min(20.0 * TICK.as_secs_f64());
         let t0 = Instant::now();
-        // Catch up at most 20 ticks' worth, so a slow machine falls behind instead of spiralling.
-        owed = owed.min(20.0 * TICK.as_secs_f64());
-        while !paused && owed >= sim.dt * 0.999 {
+        while !state.paused && state.owed >= sim.dt * 0.999 {
             if let Err(b) = sim.step() {
-                message = Some(if b.fatal {
+                state.message = Some(if b.fatal {
                     format!("t = {:.3} s: {} Paused: change a setting, use a tool or Reset to go on.", b.time_s, b.message)
                 } else {
                     format!("t = {:.3} s: {}", b.time_s, b.message)
                 });
-                paused = b.fatal;
-                owed = 0.0;
+                state.paused = b.fatal;
+                state.owed = 0.0;
                 break;
             }
-            owed -= sim.dt;
+            state.owed -= sim.dt;
             steps += 1;
             steps_total += 1;
         }
-        if paused {
-            owed = 0.0;
+        if state.paused {
+            state.owed = 0.0;
         }
         busy += t0.elapsed();
         ticks += 1;
@@ -223,18 +276,15 @@ fn run(mut sim: Simulation, rx: &Receiver<Option<Command>>, out: &Mutex<Publishe
         let elapsed = window_start.elapsed();
         if elapsed >= Duration::from_secs(1) {
             let secs = elapsed.as_secs_f64();
-            stats = (
-                ticks as f64 / secs,
-                steps as f64 / secs,
-                if steps > 0 { busy.as_secs_f64() * 1e6 / steps as f64 } else { 0.0 },
-                (sim.time_s - sim_at_window) / secs,
-            );
+            rates = Rates {
+                ticks_per_s: ticks as f64 / secs,
+                steps_per_s: steps as f64 / secs,
+                step_us: if steps > 0 { busy.as_secs_f64() * 1e6 / steps as f64 } else { 0.0 },
+                realtime: (sim.time_s - sim_at_window) / secs,
+            };
             (window_start, ticks, steps, busy, sim_at_window) = (Instant::now(), 0, 0, Duration::ZERO, sim.time_s);
         }
-        publish(&sim, out, stats, &message, tools);
-        if let Ok(mut p) = out.lock() {
-            (p.ticks_total, p.steps_total, p.running_s) = (ticks_total, steps_total, start.elapsed().as_secs_f64());
-        }
+        publish(&sim, out, rates, &state, (ticks_total, steps_total, start.elapsed().as_secs_f64()));
         next += TICK;
         let now = Instant::now();
         if next > now {

@@ -1,11 +1,10 @@
 //! The panel's speed-against-accuracy section: the chart (computed on a background thread or
 //! read from a `chart.csv`), its Pareto front, and the choice of the smallest sufficient model.
 
-use std::sync::mpsc::{Receiver, channel};
-
 use egui_plot::{Corner, Legend, MarkerShape, Plot, PlotPoints, Points};
 
 use crate::study::chart::{ChartOptions, ChartPoint, ModelKind, compute};
+use super::worker::{Slot, State};
 use crate::study::choose::{Choice, Metric, choose};
 
 const COLOURS: [egui::Color32; 5] = [
@@ -24,7 +23,7 @@ enum Message {
 /// State of the section.
 pub struct StudyPanel {
     points: Vec<ChartPoint>,
-    rx: Option<Receiver<Message>>,
+    job: Slot<Message>,
     status: String,
     csv_path: String,
     max_error: f64,
@@ -37,7 +36,7 @@ impl Default for StudyPanel {
     fn default() -> Self {
         Self {
             points: Vec::new(),
-            rx: None,
+            job: Slot::default(),
             status: String::new(),
             csv_path: "chart/chart.csv".into(),
             max_error: 1.5,
@@ -50,10 +49,10 @@ impl Default for StudyPanel {
 
 impl StudyPanel {
     /// Draws the section for `object`; `wake` repaints the UI from the worker thread.
-    pub fn ui(&mut self, ui: &mut egui::Ui, object: &str, wake: impl Fn() + Send + 'static) {
+    pub fn ui(&mut self, ui: &mut egui::Ui, object: &str, wake: impl Fn() + Send + Sync + 'static) {
         self.poll();
         ui.horizontal(|ui| {
-            let busy = self.rx.is_some();
+            let busy = self.job.busy();
             if ui
                 .add_enabled(!busy, egui::Button::new("Compute chart"))
                 .on_hover_text("every model at 4^3, 8^3 and 16^3 on a background thread (timings share the CPU with the physics thread)")
@@ -144,54 +143,38 @@ impl StudyPanel {
         }
     }
 
-    fn start(&mut self, object: &str, wake: impl Fn() + Send + 'static) {
-        let (tx, rx) = channel();
+    /// Whether the chart is being computed.
+    pub fn busy(&self) -> bool {
+        self.job.busy()
+    }
+
+    fn start(&mut self, object: &str, wake: impl Fn() + Send + Sync + 'static) {
         let opts = ChartOptions { objects: vec![object.to_owned()], resolutions: vec![4, 8, 16], timing_s: 0.05 };
-        let spawned = std::thread::Builder::new().name("chart".into()).spawn(move || {
+        let started = self.job.start("chart", wake, move |ctx| {
             let result = compute(&opts, &mut |m| {
-                let _ = tx.send(Message::Progress(m.to_owned()));
-                wake();
+                ctx.send(Message::Progress(m.to_owned()));
             });
-            let _ = tx.send(Message::Done(result.map(|r| r.0).map_err(|e| format!("{e:#}"))));
-            wake();
+            ctx.send(Message::Done(result.map(|r| r.0).map_err(|e| format!("{e:#}"))));
         });
-        match spawned {
-            Ok(_) => {
-                self.rx = Some(rx);
-                self.status = "computing the chart...".into();
-            }
-            Err(e) => self.status = format!("cannot start the chart thread: {e}"),
+        match started {
+            Ok(()) => self.status = "computing the chart...".into(),
+            Err(e) => self.status = format!("{e}"),
         }
     }
 
     fn poll(&mut self) {
-        let Some(rx) = &self.rx else { return };
-        let mut finished = false;
-        loop {
-            match rx.try_recv() {
-                Ok(Message::Progress(m)) => self.status = m,
-                Ok(Message::Done(Ok(points))) => {
-                    self.status = format!("chart: {} points", points.len());
-                    self.points = points;
-                    self.choice = None;
-                    finished = true;
-                }
-                Ok(Message::Done(Err(e))) => {
-                    self.status = format!("chart failed: {e}");
-                    finished = true;
-                }
-                Err(std::sync::mpsc::TryRecvError::Empty) => break,
-                Err(std::sync::mpsc::TryRecvError::Disconnected) => {
-                    if !finished {
-                        self.status = "the chart thread stopped unexpectedly".into();
-                    }
-                    finished = true;
-                    break;
-                }
+        let (status, points, choice) = (&mut self.status, &mut self.points, &mut self.choice);
+        let ended = self.job.poll(|m| match m {
+            Message::Progress(m) => *status = m,
+            Message::Done(Ok(p)) => {
+                *status = format!("chart: {} points", p.len());
+                *points = p;
+                *choice = None;
             }
-        }
-        if finished {
-            self.rx = None;
+            Message::Done(Err(e)) => *status = format!("chart failed: {e}"),
+        });
+        if let Some(State::Stopped(why)) = ended {
+            self.status = format!("the chart thread stopped unexpectedly ({why})");
         }
     }
 }

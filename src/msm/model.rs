@@ -116,6 +116,18 @@ impl MsmParams {
         Ok(())
     }
 
+    /// These parameters with the ties of a transversely isotropic material imposed (`k3 = k2`,
+    /// `c13 = c12` where face diagonals are set); unchanged for an orthotropic one.
+    pub fn with_ties(mut self, transversely_isotropic: bool) -> Self {
+        if transversely_isotropic {
+            self.k3 = self.k2;
+            if self.c12.is_some() {
+                self.c13 = self.c12;
+            }
+        }
+        self
+    }
+
     /// The ties of a transversely isotropic material (axis 1 distinct): `k3 = k2` and, where
     /// face diagonals are set, `c13 = c12`. Orthotropic materials have no ties.
     pub fn check_ties(&self, transversely_isotropic: bool) -> Result<(), ParamError> {

@@ -1,10 +1,15 @@
-//! The interactive simulation: a mass-spring tissue stepped at a fixed time step, with the user's
-//! tools (a dragging spring, a spherical probe with real contact) and a blow-up guard. No GPU
+//! The interactive simulation: any [`Tissue`] model stepped at a fixed time step, with the user's
+//! tools (a dragging spring, a spherical probe with real contact), a blow-up guard, and the
+//! integrator policy (the one place that decides which integrator a time step may use). No GPU
 //! types and no threads: the viewer's physics thread and the headless `simulate` command both
 //! drive this.
 
+pub mod tissue;
+
+pub use tissue::{MsmTissue, Tissue, explicit_dt_limit};
+
 use crate::cases::LoadCase;
-use crate::msm::{Dynamics, MsmModel, MsmParams};
+use crate::msm::{MsmModel, MsmParams};
 
 /// Time integrator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
@@ -50,6 +55,26 @@ pub enum Tool {
     },
 }
 
+/// The automatic choice runs symplectic Euler up to this fraction of its stability limit.
+pub const AUTO_EXPLICIT_FRACTION: f64 = 0.5;
+/// Symplectic Euler, asked for by name, is accepted up to this fraction of its limit.
+pub const MAX_EXPLICIT_FRACTION: f64 = 0.9;
+
+/// The integrator policy: `requested` (or the automatic choice for `None`: symplectic at most
+/// [`AUTO_EXPLICIT_FRACTION`] of the explicit `limit`, prefactored implicit otherwise), refused
+/// with a message for symplectic Euler above [`MAX_EXPLICIT_FRACTION`] of its limit.
+pub fn choose_integrator(requested: Option<Integrator>, dt: f64, limit: f64) -> Result<Integrator, String> {
+    match requested {
+        None => Ok(if dt <= AUTO_EXPLICIT_FRACTION * limit { Integrator::Symplectic } else { Integrator::Prefactored }),
+        Some(Integrator::Symplectic) if dt > MAX_EXPLICIT_FRACTION * limit => Err(format!(
+            "symplectic Euler at dt = {:.3e} s is above {MAX_EXPLICIT_FRACTION} x its stability limit of about \
+             {limit:.3e} s for this tissue",
+            dt
+        )),
+        Some(i) => Ok(i),
+    }
+}
+
 /// Stiffness of the dragging spring, N/m, and its damping, N s/m.
 pub const DRAG_STIFFNESS: f64 = 1000.0;
 const DRAG_DAMPING: f64 = 1.0;
@@ -81,10 +106,8 @@ enum Unhealthy {
 /// The running tissue.
 #[derive(Debug)]
 pub struct Simulation {
-    /// The model.
-    pub model: MsmModel,
-    /// Its state.
-    pub dynamics: Dynamics,
+    /// The model and its state.
+    pub tissue: Box<dyn Tissue>,
     /// Integrator.
     pub integrator: Integrator,
     /// Time step, s.
@@ -101,9 +124,8 @@ pub struct Simulation {
     good_v: [Vec<f64>; 3],
     good_time: Option<f64>,
     steps_since_good: usize,
+    rest: [Vec<f64>; 3],
     contact_forces: [Vec<f64>; 3],
-    /// [`Simulation::explicit_dt_limit`] of the current model.
-    dt_limit: f64,
     /// Blow-ups since the last healthy step past the previous blow-up's time.
     recoveries: u32,
     /// Simulated time of the last blow-up, s.
@@ -111,14 +133,22 @@ pub struct Simulation {
 }
 
 impl Simulation {
-    /// The model at rest, one face clamped by `case` (if any) with its loads.
+    /// A mass-spring `model` at rest, one face clamped by `case` (if any) with its loads.
     pub fn new(model: MsmModel, integrator: Integrator, dt: f64, case: Option<&LoadCase>) -> Self {
-        let mut dynamics = Dynamics::new(&model);
+        let density = model.node_mass * model.grid.num_nodes() as f64 / crate::grid::CUBE_SIDE_M.powi(3);
+        Self::with_tissue(Box::new(MsmTissue::new(model, density)), integrator, dt, case)
+    }
+
+    /// Any tissue model at rest, one face clamped by `case` (if any) with its loads.
+    pub fn with_tissue(mut tissue: Box<dyn Tissue>, integrator: Integrator, dt: f64, case: Option<&LoadCase>) -> Self {
         if let Some(c) = case {
-            dynamics.apply_case(c);
+            tissue.apply_case(c);
         }
-        let base_load = dynamics.f_ext.clone();
-        let zeros = || std::array::from_fn(|_| vec![0.0; model.grid.num_nodes()]);
+        let base_load = tissue.f_ext_mut().clone();
+        let grid = tissue.grid();
+        let nn = grid.num_nodes();
+        let zeros = || std::array::from_fn(|_| vec![0.0; nn]);
+        let rest = std::array::from_fn(|c| (0..nn).map(|p| grid.position(p)[c]).collect());
         Self {
             integrator,
             dt,
@@ -130,64 +160,52 @@ impl Simulation {
             good_v: zeros(),
             good_time: None,
             steps_since_good: 0,
+            rest,
             contact_forces: zeros(),
-            dt_limit: Self::explicit_dt_limit(&model),
             recoveries: 0,
             last_blow_up_s: f64::NEG_INFINITY,
-            model,
-            dynamics,
+            tissue,
         }
     }
 
-    /// [`Simulation::explicit_dt_limit`] of the running model (cached).
+    /// The explicit stability limit of the running model (cached by the model), s.
     pub fn dt_limit(&self) -> f64 {
-        self.dt_limit
+        self.tissue.explicit_dt_limit()
     }
 
-    /// Estimated critical time step of symplectic Euler, `2 / omega_max`, from Gershgorin's
-    /// bound `omega_max^2 <= max_i sum_j |K_ij| / m` on the rest stiffness (conservative).
-    pub fn explicit_dt_limit(model: &MsmModel) -> f64 {
-        let mut row = vec![0.0f64; model.grid.num_nodes()];
-        for s in model.springs() {
-            let k = model.families[s.family].stiffness[s.a];
-            let d = model.families[s.family].family.offset.map(|o| f64::from(o.abs()));
-            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            // Row sums of k d d^T (and its off-diagonal copy) for the worst component.
-            let w = (0..3).map(|c| d[c] / len * (d[0] + d[1] + d[2]) / len).fold(0.0, f64::max);
-            row[s.a] += 2.0 * k * w;
-            row[s.b] += 2.0 * k * w;
+    /// Sets the integrator and step by [`choose_integrator`]; on a refusal switches to
+    /// prefactored implicit Euler and says so.
+    pub fn set_integrator(&mut self, requested: Option<Integrator>, dt: f64) -> Option<String> {
+        self.dt = dt;
+        match choose_integrator(requested, dt, self.dt_limit()) {
+            Ok(i) => {
+                self.integrator = i;
+                None
+            }
+            Err(why) => {
+                self.integrator = Integrator::Prefactored;
+                Some(format!("{why}: switched to prefactored implicit Euler"))
+            }
         }
-        let lambda = row.iter().copied().fold(0.0, f64::max) / model.node_mass;
-        // Damping narrows the window: for v' = -(d/m) v the explicit limit is 2 m / d.
-        let damping_limit = if model.params.d > 0.0 { 2.0 * model.node_mass / model.params.d } else { f64::INFINITY };
-        (2.0 / lambda.sqrt()).min(damping_limit)
-    }
-
-    /// The integrator to use by default for `dt`: symplectic when `dt` is safely below its
-    /// limit, implicit otherwise.
-    pub fn default_integrator(model: &MsmModel, dt: f64) -> Integrator {
-        Self::integrator_for(dt, Self::explicit_dt_limit(model))
-    }
-
-    /// Symplectic when `dt` is at most half the explicit limit `limit`, prefactored implicit otherwise.
-    pub fn integrator_for(dt: f64, limit: f64) -> Integrator {
-        if dt <= 0.5 * limit { Integrator::Symplectic } else { Integrator::Prefactored }
     }
 
     /// Replaces the parameters, keeping the state (a calibration result applied live).
-    pub fn set_params(&mut self, params: MsmParams) -> Result<(), crate::msm::ParamError> {
-        let density = self.model.node_mass * self.model.grid.num_nodes() as f64 / crate::grid::CUBE_SIDE_M.powi(3);
-        self.model = MsmModel::new(self.model.grid, params, density)?;
-        self.dynamics.set_model(&self.model);
-        self.dt_limit = Self::explicit_dt_limit(&self.model);
-        Ok(())
+    pub fn set_params(&mut self, params: MsmParams) -> Result<(), String> {
+        self.tissue.set_params(params)
+    }
+
+    /// Node displacements from rest, row = node.
+    pub fn displacements(&self) -> Vec<[f64; 3]> {
+        let x = self.tissue.x();
+        (0..x[0].len()).map(|p| std::array::from_fn(|c| x[c][p] - self.rest[c][p])).collect()
     }
 
     /// Applies a load case (fixed nodes and loads), keeping the state.
     pub fn apply_case(&mut self, case: &LoadCase) {
-        self.dynamics.apply_case(case);
+        self.tissue.apply_case(case);
+        let f = self.tissue.f_ext_mut();
         for c in 0..3 {
-            self.base_load[c].copy_from_slice(&self.dynamics.f_ext[c]);
+            self.base_load[c].copy_from_slice(&f[c]);
         }
         self.good_time = None;
     }
@@ -201,13 +219,10 @@ impl Simulation {
     }
 
     fn to_rest(&mut self) {
-        let grid = self.model.grid;
-        for p in 0..grid.num_nodes() {
-            let r = grid.position(p);
-            for c in 0..3 {
-                self.dynamics.x[c][p] = r[c];
-                self.dynamics.v[c][p] = 0.0;
-            }
+        let (x, v) = self.tissue.x_v_mut();
+        for c in 0..3 {
+            x[c].copy_from_slice(&self.rest[c]);
+            v[c].fill(0.0);
         }
         self.time_s = 0.0;
         self.good_time = None;
@@ -216,14 +231,7 @@ impl Simulation {
     /// Advances one step; on a blow-up restores the last good state and says why.
     pub fn step(&mut self) -> Result<(), BlowUp> {
         self.apply_tool_load();
-        let stepped = match self.integrator {
-            Integrator::Symplectic => {
-                self.dynamics.step_symplectic(&self.model, self.dt);
-                Ok(())
-            }
-            Integrator::Implicit => self.dynamics.step_implicit(&self.model, self.dt),
-            Integrator::Prefactored => self.dynamics.step_prefactored(&self.model, self.dt),
-        };
+        let stepped = self.tissue.step(self.integrator, self.dt);
         self.enforce_contact();
         self.time_s += self.dt;
         let unhealthy = if stepped.is_ok() { self.unhealthy() } else { None };
@@ -233,16 +241,17 @@ impl Simulation {
             }
             self.steps_since_good += 1;
             if self.good_time.is_none() || self.steps_since_good >= 100 {
+                let (x, v) = (self.tissue.x(), self.tissue.v());
                 for c in 0..3 {
-                    self.good_x[c].copy_from_slice(&self.dynamics.x[c]);
-                    self.good_v[c].copy_from_slice(&self.dynamics.v[c]);
+                    self.good_x[c].copy_from_slice(&x[c]);
+                    self.good_v[c].copy_from_slice(&v[c]);
                 }
                 self.good_time = Some(self.time_s);
                 self.steps_since_good = 0;
             }
             return Ok(());
         }
-        let limit = self.dt_limit;
+        let limit = self.dt_limit();
         let dragging = matches!(self.tool, Tool::Drag { .. });
         let message = match (stepped, self.integrator, unhealthy) {
             (Err(e), _, _) => format!("the implicit solve failed ({e}); the state was reset"),
@@ -284,9 +293,10 @@ impl Simulation {
     fn restore(&mut self) {
         match self.good_time {
             Some(t) => {
+                let (x, v) = self.tissue.x_v_mut();
                 for c in 0..3 {
-                    self.dynamics.x[c].copy_from_slice(&self.good_x[c]);
-                    self.dynamics.v[c].copy_from_slice(&self.good_v[c]);
+                    x[c].copy_from_slice(&self.good_x[c]);
+                    v[c].copy_from_slice(&self.good_v[c]);
                 }
                 self.time_s = t;
             }
@@ -301,37 +311,42 @@ impl Simulation {
     /// energy of the whole mass moving at 10 m/s.
     fn unhealthy(&self) -> Option<Unhealthy> {
         let l = crate::grid::CUBE_SIDE_M;
-        let finite = self.dynamics.x.iter().chain(&self.dynamics.v).all(|c| c.iter().all(|v| v.is_finite()));
+        let (x, v) = (self.tissue.x(), self.tissue.v());
+        let finite = x.iter().chain(v).all(|c| c.iter().all(|v| v.is_finite()));
         if !finite {
             return Some(Unhealthy::NonFinite);
         }
-        let grid = self.model.grid;
-        for p in 0..grid.num_nodes() {
-            let r = grid.position(p);
-            if (0..3).any(|c| (self.dynamics.x[c][p] - r[c]).abs() > l) {
+        for c in 0..3 {
+            if x[c].iter().zip(&self.rest[c]).any(|(x, r)| (x - r).abs() > l) {
                 return Some(Unhealthy::OutsideCube);
             }
         }
-        let mass = self.model.node_mass * grid.num_nodes() as f64;
-        if self.dynamics.kinetic_energy(&self.model) > 0.5 * mass * 10.0 * 10.0 {
+        if self.tissue.kinetic_energy() > 0.5 * self.tissue.total_mass() * 10.0 * 10.0 {
             return Some(Unhealthy::Energy);
         }
         None
     }
 
     fn apply_tool_load(&mut self) {
-        for c in 0..3 {
-            self.dynamics.f_ext[c].copy_from_slice(&self.base_load[c]);
-        }
         if self.tool == Tool::None {
             self.tool_force = [0.0; 3];
         }
-        if let Tool::Drag { node, target } = self.tool {
-            let mut f = [0.0; 3];
+        let drag = match self.tool {
+            Tool::Drag { node, target } => {
+                let (x, v) = (self.tissue.x(), self.tissue.v());
+                let f: [f64; 3] =
+                    std::array::from_fn(|c| DRAG_STIFFNESS * (target[c] - x[c][node]) - DRAG_DAMPING * v[c][node]);
+                Some((node, f))
+            }
+            _ => None,
+        };
+        let f_ext = self.tissue.f_ext_mut();
+        for c in 0..3 {
+            f_ext[c].copy_from_slice(&self.base_load[c]);
+        }
+        if let Some((node, f)) = drag {
             for c in 0..3 {
-                f[c] =
-                    DRAG_STIFFNESS * (target[c] - self.dynamics.x[c][node]) - DRAG_DAMPING * self.dynamics.v[c][node];
-                self.dynamics.f_ext[c][node] += f[c];
+                f_ext[c][node] += f[c];
             }
             self.tool_force = f.map(|v| -v);
         }
@@ -344,23 +359,25 @@ impl Simulation {
             return;
         };
         let mut push = [0.0; 3];
-        let computed = self.dynamics.forces(&self.model);
+        let nn = self.rest[0].len();
+        // The force on every node before any is projected.
+        let computed = self.tissue.forces();
         for c in 0..3 {
             self.contact_forces[c].copy_from_slice(&computed[c]);
         }
-        let forces = &self.contact_forces;
-        let x = &mut self.dynamics.x;
-        let v = &mut self.dynamics.v;
-        for p in 0..x[0].len() {
-            if self.dynamics.free[p] == 0.0 {
+        for p in 0..nn {
+            if self.tissue.free()[p] == 0.0 {
                 continue;
             }
+            let x = self.tissue.x();
             let d = [x[0][p] - centre[0], x[1][p] - centre[1], x[2][p] - centre[2]];
             let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             if dist >= radius {
                 continue;
             }
             let n = if dist > 1e-12 { d.map(|c| c / dist) } else { [0.0, 0.0, 1.0] };
+            let f = [self.contact_forces[0][p], self.contact_forces[1][p], self.contact_forces[2][p]];
+            let (x, v) = self.tissue.x_v_mut();
             for c in 0..3 {
                 x[c][p] = centre[c] + radius * n[c];
             }
@@ -370,7 +387,7 @@ impl Simulation {
                     v[c][p] -= vn * n[c];
                 }
             }
-            let fn_ = forces[0][p] * n[0] + forces[1][p] * n[1] + forces[2][p] * n[2];
+            let fn_ = f[0] * n[0] + f[1] * n[1] + f[2] * n[2];
             if fn_ < 0.0 {
                 for c in 0..3 {
                     push[c] += fn_ * n[c];
@@ -382,8 +399,9 @@ impl Simulation {
 
     /// Node positions as f32 for drawing.
     pub fn positions_f32(&self, out: &mut [[f32; 3]]) {
+        let x = self.tissue.x();
         for (p, o) in out.iter_mut().enumerate() {
-            *o = [self.dynamics.x[0][p] as f32, self.dynamics.x[1][p] as f32, self.dynamics.x[2][p] as f32];
+            *o = [x[0][p] as f32, x[1][p] as f32, x[2][p] as f32];
         }
     }
 }

@@ -1,0 +1,167 @@
+//! What is drawn over the tissue, computed once per frame: the colour scalar (displacement, or
+//! distance to the FEM answer) and its range, the spring, node and fixed-face lines, and the
+//! legend. Reuses its buffers: no allocation per frame.
+
+use std::fmt::Write as _;
+
+use glam::Vec3;
+
+use crate::grid::Grid;
+use crate::render::gpu::LineVertex;
+use crate::render::mesh::SurfaceMesh;
+use crate::render::{fixed_outline, lattice_edges, normalise, push_edges};
+use crate::scene::ColourMode;
+
+/// What the overlays show.
+#[derive(Debug, Clone, Copy)]
+pub struct Show {
+    /// Colour map.
+    pub colour: ColourMode,
+    /// Springs (lattice edges).
+    pub springs: bool,
+    /// Node markers.
+    pub nodes: bool,
+    /// Fixed-face outline.
+    pub fixed: bool,
+}
+
+/// The overlay buffers.
+pub struct Overlay {
+    /// Lines to draw (springs, nodes, fixed face).
+    pub lines: Vec<LineVertex>,
+    /// The colour scalar per node, in [0, 1].
+    pub scalar: Vec<f32>,
+    /// The legend's range text.
+    pub range: String,
+    edges: Vec<(usize, usize)>,
+    rest: Vec<[f32; 3]>,
+}
+
+impl Overlay {
+    /// Buffers for `grid`.
+    pub fn new(grid: &Grid) -> Self {
+        Self {
+            lines: Vec::with_capacity(2 * 6000),
+            scalar: vec![0.0; grid.num_nodes()],
+            range: String::with_capacity(64),
+            edges: lattice_edges(grid),
+            rest: grid.positions().iter().map(|p| p.map(|c| c as f32)).collect(),
+        }
+    }
+
+    /// Rest positions, f32.
+    pub fn rest(&self) -> &[[f32; 3]] {
+        &self.rest
+    }
+
+    /// Recomputes the scalar, its range text, the surface mesh and the lines for `positions`.
+    pub fn update(
+        &mut self,
+        show: Show,
+        positions: &[[f32; 3]],
+        fixed: &[bool],
+        fem: Option<&[[f64; 3]]>,
+        mesh: &mut SurfaceMesh,
+    ) {
+        let mut max = None;
+        self.range.clear();
+        match (show.colour, fem) {
+            (ColourMode::None, _) => self.scalar.fill(0.0),
+            (ColourMode::Displacement, _) => {
+                for (s, (p, r)) in self.scalar.iter_mut().zip(positions.iter().zip(&self.rest)) {
+                    *s = Vec3::from(*p).distance(Vec3::from(*r));
+                }
+                let m = 0.002f32.max(self.scalar.iter().copied().fold(0.0, f32::max));
+                max = Some(m);
+                let _ = write!(self.range, "0 .. {:.2} mm", m * 1e3);
+            }
+            (ColourMode::Error, Some(fem)) => {
+                for (i, s) in self.scalar.iter_mut().enumerate() {
+                    let target =
+                        Vec3::from(self.rest[i]) + Vec3::new(fem[i][0] as f32, fem[i][1] as f32, fem[i][2] as f32);
+                    *s = Vec3::from(positions[i]).distance(target);
+                }
+                self.range.push_str("0 .. max |x_msm - x_fem|");
+            }
+            (ColourMode::Error, None) => {
+                self.scalar.fill(0.0);
+                self.range.push_str("apply a load case for the FEM answer");
+            }
+        }
+        normalise(&mut self.scalar, max);
+        mesh.update(positions, Some(&self.scalar));
+        self.lines.clear();
+        if show.fixed {
+            fixed_outline(&self.edges, positions, fixed, [0.2, 0.9, 0.3, 1.0], &mut self.lines);
+        }
+        if show.nodes {
+            for p in positions {
+                for axis in 0..3 {
+                    if self.lines.len() + 2 > self.lines.capacity() {
+                        break;
+                    }
+                    let (mut a, mut b) = (*p, *p);
+                    a[axis] -= 0.0015;
+                    b[axis] += 0.0015;
+                    self.lines.push(LineVertex { position: a, colour: [1.0, 1.0, 0.6, 0.9] });
+                    self.lines.push(LineVertex { position: b, colour: [1.0, 1.0, 0.6, 0.9] });
+                }
+            }
+        }
+        if show.springs {
+            push_edges(&self.edges, positions, [0.9, 0.9, 0.9, 0.35], |_, _| true, &mut self.lines);
+        }
+    }
+}
+
+/// Average and largest distance between the drawn positions and the FEM answer, metres.
+pub fn error_vs_fem(pos: &[[f32; 3]], rest: &[[f32; 3]], fem: &[[f64; 3]]) -> (f64, f64) {
+    let mut sum = 0.0;
+    let mut max = 0.0f64;
+    for ((p, r), u) in pos.iter().zip(rest).zip(fem) {
+        let d = (0..3).map(|c| (f64::from(p[c]) - f64::from(r[c]) - u[c]).powi(2)).sum::<f64>().sqrt();
+        sum += d;
+        max = max.max(d);
+    }
+    (sum / pos.len().max(1) as f64, max)
+}
+
+/// The colour legend at the right edge of the 3D view.
+pub fn legend(ui: &mut egui::Ui, rect: egui::Rect, mode: ColourMode, range: &str) {
+    let painter = ui.painter_at(rect);
+    let x0 = rect.right() - 40.0;
+    let (top, bottom) = (rect.top() + 40.0, rect.top() + 240.0);
+    let steps = 32;
+    for i in 0..steps {
+        let t = i as f32 / steps as f32;
+        let c = ramp(1.0 - t);
+        let y = top + t * (bottom - top);
+        painter.rect_filled(
+            egui::Rect::from_min_max(egui::pos2(x0, y), egui::pos2(x0 + 16.0, y + (bottom - top) / steps as f32 + 1.0)),
+            0.0,
+            c,
+        );
+    }
+    let title = match mode {
+        ColourMode::Displacement => "displacement",
+        ColourMode::Error => "MSM-FEM error",
+        ColourMode::None => "",
+    };
+    let label = |pos: egui::Pos2, align: egui::Align2, text: &str, size: f32| {
+        painter.text(pos, align, text, egui::FontId::proportional(size), egui::Color32::WHITE);
+    };
+    label(egui::pos2(x0 + 16.0, top - 22.0), egui::Align2::RIGHT_BOTTOM, title, 13.0);
+    label(egui::pos2(x0 - 6.0, top), egui::Align2::RIGHT_TOP, "max", 12.0);
+    label(egui::pos2(x0 - 6.0, bottom), egui::Align2::RIGHT_BOTTOM, "0", 12.0);
+    label(egui::pos2(x0 + 16.0, bottom + 6.0), egui::Align2::RIGHT_TOP, range, 12.0);
+}
+
+/// The shader's colour ramp, for the legend (same stops as `surface.wgsl`).
+fn ramp(t: f32) -> egui::Color32 {
+    let stops = [[0.15, 0.20, 0.70], [0.10, 0.75, 0.85], [0.95, 0.90, 0.25], [0.85, 0.15, 0.10]];
+    let s = t.clamp(0.0, 1.0) * 3.0;
+    let i = (s.floor() as usize).min(2);
+    let f = s - i as f32;
+    let c: [f32; 3] = std::array::from_fn(|k| stops[i][k] * (1.0 - f) + stops[i + 1][k] * f);
+    egui::Color32::from_rgb((c[0] * 255.0) as u8, (c[1] * 255.0) as u8, (c[2] * 255.0) as u8)
+}

@@ -1,0 +1,89 @@
+//! The side panel: a status header, then one section a file. Sections edit the pure view
+//! settings directly and return [`Request`]s for everything else; none calls the physics thread.
+
+pub mod calibration;
+pub mod integrator;
+pub mod model;
+pub mod tools;
+pub mod view;
+
+use super::physics::Published;
+use super::state::{Request, Shown, ViewSettings};
+use super::study_panel::StudyPanel;
+use crate::render::camera::OrbitCamera;
+
+/// What the panel reads and edits besides the viewer state.
+pub struct PanelContext<'a> {
+    /// The physics thread's latest state.
+    pub published: &'a Published,
+    /// Frames per second.
+    pub fps: f64,
+    /// Tool input-to-screen latency: mean and max, s.
+    pub latency: (f64, f64),
+    /// The physics thread's end, if it ended.
+    pub physics_stopped: Option<&'a str>,
+    /// Rest positions (f32), for the error readout.
+    pub rest: &'a [[f32; 3]],
+}
+
+/// Draws the whole panel.
+pub fn show(
+    ui: &mut egui::Ui,
+    settings: &mut ViewSettings,
+    shown: &Shown,
+    ctx: &PanelContext<'_>,
+    camera: &mut OrbitCamera,
+    study: &mut StudyPanel,
+    requests: &mut Vec<Request>,
+) {
+    header(ui, shown, ctx);
+    ui.separator();
+    egui::CollapsingHeader::new("Object and model")
+        .default_open(true)
+        .show(ui, |ui| model::show(ui, settings, shown, requests));
+    egui::CollapsingHeader::new("Integrator")
+        .default_open(true)
+        .show(ui, |ui| integrator::show(ui, shown, ctx.published, requests));
+    egui::CollapsingHeader::new("Tools")
+        .default_open(true)
+        .show(ui, |ui| tools::show(ui, settings, shown, ctx, requests));
+    egui::CollapsingHeader::new("View").default_open(true).show(ui, |ui| view::show(ui, settings, camera));
+    egui::CollapsingHeader::new("Speed vs accuracy").default_open(false).show(ui, |ui| {
+        let repaint = ui.ctx().clone();
+        let object = if settings.object == "file" { shown.material.name.clone() } else { settings.object.clone() };
+        study.ui(ui, &object, move || repaint.request_repaint());
+    });
+    egui::CollapsingHeader::new("Calibration (GA+SA)")
+        .default_open(true)
+        .show(ui, |ui| calibration::show(ui, settings, shown, requests));
+}
+
+fn header(ui: &mut egui::Ui, shown: &Shown, ctx: &PanelContext<'_>) {
+    let r = ctx.published.rates;
+    ui.heading("tissue-sim");
+    ui.label(format!(
+        "{:.0} fps | physics {:.0} ticks/s ({:.0} steps/s, {:.1} us/step, x{:.2} real time)",
+        ctx.fps, r.ticks_per_s, r.steps_per_s, r.step_us, r.realtime
+    ));
+    if ctx.latency.0 > 0.0 {
+        ui.label(format!(
+            "tool input to screen: mean {:.0} ms, max {:.0} ms",
+            ctx.latency.0 * 1e3,
+            ctx.latency.1 * 1e3
+        ));
+    }
+    let red = egui::Color32::from_rgb(255, 120, 90);
+    let amber = egui::Color32::from_rgb(230, 200, 90);
+    if let Some(m) = ctx.physics_stopped {
+        ui.colored_label(red, m);
+    }
+    if let Some(m) = &ctx.published.message {
+        ui.colored_label(red, m);
+    }
+    if let Some(n) = &ctx.published.note {
+        ui.colored_label(amber, n);
+    }
+    if let Some(n) = &shown.note {
+        ui.colored_label(amber, n);
+    }
+}

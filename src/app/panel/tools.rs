@@ -1,0 +1,66 @@
+//! Panel section "Tools": the mouse tool, the probe's size, the force on the tool, the
+//! force-depth plot, and the paper's load cases with the live error against their FEM answer.
+
+use egui_plot::{Line, Plot, PlotPoints};
+
+use super::PanelContext;
+use crate::app::overlay::error_vs_fem;
+use crate::app::state::{Request, Shown, ToolKind, ViewSettings};
+use crate::cases::FORCES_N;
+
+/// Draws the section.
+pub fn show(
+    ui: &mut egui::Ui,
+    settings: &mut ViewSettings,
+    shown: &Shown,
+    ctx: &PanelContext<'_>,
+    requests: &mut Vec<Request>,
+) {
+    ui.horizontal(|ui| {
+        ui.selectable_value(&mut settings.tool, ToolKind::Drag, "drag");
+        ui.selectable_value(&mut settings.tool, ToolKind::Probe, "probe");
+        ui.selectable_value(&mut settings.tool, ToolKind::Orbit, "camera only");
+    });
+    ui.label("Left mouse: the tool; right mouse: rotate; wheel: zoom.");
+    if settings.tool == ToolKind::Probe {
+        ui.add(egui::Slider::new(&mut settings.probe_radius_mm, 2.0..=30.0).text("probe radius (mm)"));
+    }
+    let f = ctx.published.tool_force;
+    let norm = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+    ui.label(format!("force on tool: |F| = {norm:.4} N  ({:.4}, {:.4}, {:.4})", f[0], f[1], f[2]));
+    if settings.tool == ToolKind::Probe {
+        Plot::new("force_depth").height(130.0).x_axis_label("depth (mm)").y_axis_label("force (N)").show(ui, |p| {
+            p.line(Line::new("force vs depth", PlotPoints::from(shown.force_depth.clone())));
+        });
+    }
+    ui.separator();
+    ui.label("Paper's load case (clamped face, force on the opposite face):");
+    ui.horizontal(|ui| {
+        for a in 1..=3 {
+            ui.selectable_value(&mut settings.case_axis, a, format!("axis {a}"));
+        }
+    });
+    ui.horizontal(|ui| {
+        for f in FORCES_N {
+            ui.selectable_value(&mut settings.case_force, f, format!("{f} N"));
+        }
+    });
+    ui.horizontal(|ui| {
+        if ui.button("Apply case").clicked() {
+            requests.push(Request::ApplyCase);
+        }
+        if ui.button("Free cube").clicked() {
+            requests.push(Request::FreeCube);
+        }
+    });
+    if let (Some(case), Some(fem)) = (&shown.case_active, &shown.fem_answer) {
+        let (avg, max) = error_vs_fem(&ctx.published.positions, ctx.rest, fem);
+        let h = crate::grid::Grid::paper().h();
+        ui.label(format!(
+            "{}: MSM vs FEM now: average {:.3} % of h, max {:.3} % of h",
+            case.id,
+            100.0 * avg / h,
+            100.0 * max / h
+        ));
+    }
+}

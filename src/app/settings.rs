@@ -1,0 +1,112 @@
+//! What the viewer shows and the user sets: the pure view settings the panel edits directly
+//! ([`ViewSettings`]) and the model-side state it displays ([`Shown`]), changed only by
+//! [`super::state::ViewerState::handle`].
+
+use crate::calibrate::{GenerationStats, Method};
+use crate::cases::LoadCase;
+use crate::material::Material;
+use crate::msm::{MsmParams, Topology};
+use crate::scene::ColourMode;
+use crate::sim::Integrator;
+
+/// What the left mouse button does on the 3D view.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ToolKind {
+    /// Rotates the camera.
+    Orbit,
+    /// Pulls the picked node.
+    Drag,
+    /// Presses the spherical probe.
+    Probe,
+}
+
+/// Settings that only change what the UI shows or will ask for; the panel edits them directly.
+#[derive(Debug, Clone)]
+pub struct ViewSettings {
+    /// `A`, `B` or `file`.
+    pub object: String,
+    /// The material file for `file`.
+    pub material_path: String,
+    /// The left-button tool.
+    pub tool: ToolKind,
+    /// Probe radius, mm.
+    pub probe_radius_mm: f64,
+    /// Colour map.
+    pub colour: ColourMode,
+    /// Overlays.
+    pub show_springs: bool,
+    /// Node markers.
+    pub show_nodes: bool,
+    /// Fixed-face outline.
+    pub show_fixed: bool,
+    /// Load case to apply: axis (1-3) and force (N).
+    pub case_axis: usize,
+    /// See `case_axis`.
+    pub case_force: f64,
+    /// Calibration settings.
+    pub calib_method: Method,
+    /// Calibration seed.
+    pub calib_seed: u64,
+    /// Calibration generations.
+    pub calib_generations: usize,
+    /// Calibration population.
+    pub calib_population: usize,
+}
+
+impl Default for ViewSettings {
+    fn default() -> Self {
+        Self {
+            object: "A".into(),
+            material_path: String::new(),
+            tool: ToolKind::Drag,
+            probe_radius_mm: 15.0,
+            colour: ColourMode::Displacement,
+            show_springs: false,
+            show_nodes: false,
+            show_fixed: true,
+            case_axis: 1,
+            case_force: 10.0,
+            calib_method: Method::Hybrid,
+            calib_seed: 1,
+            calib_generations: 100,
+            calib_population: 50,
+        }
+    }
+}
+
+/// The model-side state the panel shows (changed only through [`ViewerState::handle`]).
+#[derive(Debug, Clone)]
+pub struct Shown {
+    /// The material.
+    pub material: Material,
+    /// The parameters of the running model (the panel edits a copy).
+    pub params: MsmParams,
+    /// Integrator asked for (`None`: automatic).
+    pub integrator: Option<Integrator>,
+    /// Time step asked for, s.
+    pub dt: f64,
+    /// The applied load case, if any.
+    pub case_active: Option<LoadCase>,
+    /// Its FEM answer, once solved.
+    pub fem_answer: Option<Vec<[f64; 3]>>,
+    /// Calibration progress, one entry a generation.
+    pub history: Vec<GenerationStats>,
+    /// The calibration's result, to apply.
+    pub result: Option<MsmParams>,
+    /// Whether a calibration runs.
+    pub calibrating: bool,
+    /// Generations of the running calibration.
+    pub calib_generations: usize,
+    /// A note for the user.
+    pub note: Option<String>,
+    /// Probe force against depth (mm, N).
+    pub force_depth: Vec<[f64; 2]>,
+}
+
+impl Shown {
+    /// The lattice of the running parameters.
+    pub fn topology(&self) -> Topology {
+        self.params.topology()
+    }
+}
+

@@ -1,0 +1,381 @@
+//! The viewer's state without a window: what the panel shows and edits, and the one place that
+//! turns the user's intent ([`Request`]s from the panel sections and the mouse tools) into
+//! physics [`Command`]s and background jobs. Unit-tested without a window or a GPU.
+//!
+//! Rules live elsewhere and are only asked here: the transversely isotropic ties in
+//! [`MsmParams::with_ties`], the integrator policy in [`crate::sim::choose_integrator`] (applied
+//! on the physics thread, which publishes the integrator it runs and the explicit limit), the
+//! topology in [`MsmParams::topology`]. No model is built on this side: the physics thread builds
+//! it from a recipe.
+
+use std::sync::Arc;
+
+use super::calibration::{self, Progress};
+use super::physics::{Command, Replacement};
+use super::worker::{Slot, State};
+pub use super::settings::{Shown, ToolKind, ViewSettings};
+use crate::calibrate::Settings;
+use crate::cases::LoadCase;
+use crate::fem::FemModel;
+use crate::grid::Grid;
+use crate::material::Material;
+use crate::msm::{MsmParams, Topology};
+use crate::sim::{Integrator, MsmTissue, Tissue, Tool};
+use crate::scene::tissue_params;
+
+/// What the user asked for.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Request {
+    /// Load the object in the settings (a preset or the material file), with its shipped tissue.
+    LoadObject,
+    /// Another lattice: its shipped calibration (or the material's scale).
+    SelectTopology(Topology),
+    /// Edited parameters.
+    EditParams(MsmParams),
+    /// Integrator asked for (`None`: automatic) and time step, s.
+    SetIntegrator(Option<Integrator>, f64),
+    /// Back to rest.
+    Reset,
+    /// The settings' load case, with its FEM answer solved in the background.
+    ApplyCase,
+    /// Back to the bottom clamp without loads.
+    FreeCube,
+    /// Start the calibration of the current object and lattice.
+    StartCalibration,
+    /// Stop it.
+    CancelCalibration,
+    /// Run the calibration's result.
+    ApplyCalibration,
+    /// A tool command.
+    Tool(Tool),
+    /// A new probe press: the force-depth plot starts afresh.
+    ProbeStarted,
+    /// A probe force sample (depth mm, force N) for the force-depth plot.
+    ForceSample([f64; 2]),
+}
+
+/// The viewer's state.
+pub struct ViewerState {
+    /// What the panel edits directly.
+    pub settings: ViewSettings,
+    /// What it shows.
+    pub shown: Shown,
+    grid: Grid,
+    fem: Slot<Result<Vec<[f64; 3]>, String>>,
+    calibration: Slot<Progress>,
+    wake: Arc<dyn Fn() + Send + Sync>,
+}
+
+/// A resting cube held by its bottom face (z = 0), the viewer's default scene.
+pub fn bottom_clamp(grid: &Grid) -> LoadCase {
+    let mut c = LoadCase::clamped(grid, "view", 3, 0.0);
+    c.load.fill(0.0);
+    c
+}
+
+/// The recipe of a mass-spring tissue for the physics thread.
+fn msm_recipe(params: MsmParams, density: f64) -> super::physics::TissueRecipe {
+    Box::new(move || MsmTissue::build(params, density).map(|t| Box::new(t) as Box<dyn Tissue>).map_err(|e| e.to_string()))
+}
+
+impl ViewerState {
+    /// Object A with its default tissue (the shear lattice), and the simulation to start with;
+    /// `wake` repaints the UI from background threads.
+    pub fn new(wake: impl Fn() + Send + Sync + 'static) -> anyhow::Result<(Self, Replacement)> {
+        let grid = Grid::paper();
+        let material = Material::object_a();
+        let params = tissue_params(&material, Topology::Shear)?;
+        let dt = 1e-4;
+        let state = Self {
+            settings: ViewSettings::default(),
+            shown: Shown {
+                material,
+                params,
+                integrator: None,
+                dt,
+                case_active: None,
+                fem_answer: None,
+                history: Vec::new(),
+                result: None,
+                calibrating: false,
+                calib_generations: 0,
+                note: None,
+                force_depth: Vec::new(),
+            },
+            grid,
+            fem: Slot::default(),
+            calibration: Slot::default(),
+            wake: Arc::new(wake),
+        };
+        let first = state.replacement();
+        Ok((state, first))
+    }
+
+    /// The grid shown.
+    pub fn grid(&self) -> Grid {
+        self.grid
+    }
+
+    fn replacement(&self) -> Replacement {
+        Replacement {
+            recipe: msm_recipe(self.shown.params, self.shown.material.density),
+            integrator: self.shown.integrator,
+            dt: self.shown.dt,
+            case: self.shown.case_active.clone().unwrap_or_else(|| bottom_clamp(&self.grid)),
+        }
+    }
+
+    /// Carries out `request`, sending what the physics thread must do through `send`.
+    pub fn handle(&mut self, request: Request, send: &mut dyn FnMut(Command)) {
+        match request {
+            Request::LoadObject => self.load_object(self.shown.topology(), send),
+            Request::SelectTopology(t) => self.load_object(t, send),
+            Request::EditParams(p) => {
+                let mut p = p.with_ties(self.shown.material.is_transversely_isotropic());
+                (p.k1, p.k2, p.k3) = (p.k1.max(1e-3), p.k2.max(1e-3), p.k3.max(1e-3));
+                self.shown.params = p;
+                send(Command::SetParams(p));
+            }
+            Request::SetIntegrator(i, dt) => {
+                (self.shown.integrator, self.shown.dt) = (i, dt);
+                send(Command::SetIntegrator(i, dt));
+            }
+            Request::Reset => {
+                self.shown.force_depth.clear();
+                send(Command::Reset);
+            }
+            Request::ApplyCase => self.apply_case(send),
+            Request::FreeCube => {
+                self.shown.case_active = None;
+                self.shown.fem_answer = None;
+                send(Command::ApplyCase(bottom_clamp(&self.grid)));
+            }
+            Request::StartCalibration => self.start_calibration(),
+            Request::CancelCalibration => self.calibration.cancel(),
+            Request::ApplyCalibration => {
+                if let Some(p) = self.shown.result {
+                    self.handle(Request::EditParams(p), send);
+                }
+            }
+            Request::Tool(t) => send(Command::SetTool(t)),
+            Request::ProbeStarted => self.shown.force_depth.clear(),
+            Request::ForceSample(s) => {
+                if self.shown.force_depth.last().is_none_or(|l| (l[0] - s[0]).abs() > 0.05) {
+                    self.shown.force_depth.push(s);
+                }
+            }
+        }
+    }
+
+    fn load_object(&mut self, topology: Topology, send: &mut dyn FnMut(Command)) {
+        self.shown.note = None;
+        let material = if self.settings.object == "file" {
+            match Material::from_file(std::path::Path::new(self.settings.material_path.trim())) {
+                Ok(m) => m,
+                Err(e) => {
+                    self.shown.note = Some(format!("{e:#}"));
+                    return;
+                }
+            }
+        } else {
+            match Material::preset(&self.settings.object) {
+                Some(m) => m,
+                None => return,
+            }
+        };
+        let params = tissue_params(&material, topology).unwrap_or_else(|_| {
+            // No shipped calibration: start from the material-derived scale and suggest calibrating.
+            let space = crate::calibrate::GeneSpace::new(&material, &self.grid, topology);
+            let mid: Vec<f64> = space.lo.iter().zip(&space.hi).map(|(l, h)| (l * h).sqrt()).collect();
+            self.shown.note = Some(format!(
+                "{}: no calibrated tissue shipped; using the material's scale k* — press Calibrate",
+                material.name
+            ));
+            space.params(&mid)
+        });
+        self.shown.material = material;
+        self.shown.params = params;
+        self.shown.case_active = None;
+        self.shown.fem_answer = None;
+        send(Command::Replace(self.replacement()));
+    }
+
+    fn apply_case(&mut self, send: &mut dyn FnMut(Command)) {
+        let case = LoadCase::clamped(
+            &self.grid,
+            &self.shown.material.name,
+            self.settings.case_axis,
+            self.settings.case_force,
+        );
+        let material = self.shown.material.clone();
+        let grid = self.grid;
+        let solve = case.clone();
+        let wake = Arc::clone(&self.wake);
+        // The FEM answer, solved off the UI thread (a second one while one runs is refused).
+        let started = self.fem.start("FEM answer", move || wake(), move |ctx| {
+            let r = FemModel::new(grid, &material)
+                .solve_cases(std::slice::from_ref(&solve))
+                .map(|mut s| s.remove(0).displacements)
+                .map_err(|e| e.to_string());
+            ctx.send(r);
+        });
+        if let Err(e) = started {
+            self.shown.note = Some(format!("{e}"));
+            return;
+        }
+        self.shown.case_active = Some(case.clone());
+        self.shown.fem_answer = None;
+        send(Command::SetTool(Tool::None));
+        send(Command::Reset);
+        send(Command::ApplyCase(case));
+    }
+
+    fn start_calibration(&mut self) {
+        let settings = Settings {
+            method: self.settings.calib_method,
+            seed: self.settings.calib_seed,
+            population: self.settings.calib_population,
+            generations: self.settings.calib_generations,
+            ..Settings::default()
+        };
+        let wake = Arc::clone(&self.wake);
+        let material = self.shown.material.clone();
+        match calibration::start(&mut self.calibration, material, self.shown.topology(), settings, move || wake()) {
+            Ok(()) => {
+                self.shown.history.clear();
+                self.shown.result = None;
+                self.shown.note = None;
+                self.shown.calibrating = true;
+                self.shown.calib_generations = self.settings.calib_generations;
+            }
+            Err(e) => self.shown.note = Some(format!("cannot start the calibration: {e}")),
+        }
+    }
+
+    /// Takes what the background jobs have sent.
+    pub fn poll(&mut self) {
+        let shown = &mut self.shown;
+        let ended = self.calibration.poll(|msg| match msg {
+            Progress::Generation(s) => shown.history.push(s),
+            Progress::Done(Ok(r)) => {
+                shown.note = Some(format!(
+                    "calibration {}: cost {:.4e} m in {:.1} s ({} evaluations){}",
+                    if r.cancelled { "cancelled" } else { "done" },
+                    r.cost,
+                    r.wall_s,
+                    r.evaluations,
+                    if r.cancelled { "; best so far kept" } else { "" }
+                ));
+                shown.result = Some(r.params);
+            }
+            Progress::Done(Err(e)) => shown.note = Some(format!("calibration failed: {e}")),
+        });
+        if let Some(state) = ended {
+            self.shown.calibrating = false;
+            if let State::Stopped(why) = state {
+                self.shown.note = Some(format!("the calibration stopped unexpectedly ({why}); no result"));
+            }
+        }
+        let shown = &mut self.shown;
+        let ended = self.fem.poll(|r| match r {
+            Ok(u) => shown.fem_answer = Some(u),
+            Err(e) => shown.note = Some(format!("FEM solve failed: {e}")),
+        });
+        if let Some(State::Stopped(why)) = ended {
+            self.shown.note = Some(format!("the FEM solve stopped unexpectedly ({why})"));
+        }
+    }
+
+    /// Whether a background job runs (the UI then redraws as its messages arrive).
+    pub fn busy(&self) -> bool {
+        self.fem.busy() || self.calibration.busy()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::physics::{Published, PhysicsThread};
+    use crate::sim::Simulation;
+
+    fn wait_until(physics: &PhysicsThread, mut ok: impl FnMut(&Published) -> bool) -> Published {
+        let mut p = Published::default();
+        for _ in 0..3000 {
+            physics.latest(&mut p);
+            if ok(&p) {
+                return p;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        p
+    }
+
+    fn started() -> (ViewerState, PhysicsThread) {
+        let (state, first) = ViewerState::new(|| {}).expect("state");
+        let placeholder = Simulation::with_tissue(
+            Box::new(MsmTissue::build(state.shown.params, state.shown.material.density).expect("model")),
+            Integrator::Symplectic,
+            1e-4,
+            None,
+        );
+        let physics = PhysicsThread::spawn(placeholder).expect("physics");
+        physics.send(Command::Replace(first)).expect("send");
+        (state, physics)
+    }
+
+    #[test]
+    fn applying_a_calibration_changes_topology_and_keeps_the_integrator_guard() {
+        let (mut state, physics) = started();
+        let mut send = |c| physics.send(c).expect("physics runs");
+        assert_eq!(state.shown.topology(), Topology::Shear);
+        // A result of another lattice (the paper's axis springs), applied as the panel would.
+        let axis = tissue_params(&state.shown.material, Topology::Axis).expect("shipped");
+        state.shown.result = Some(axis);
+        state.handle(Request::ApplyCalibration, &mut send);
+        assert_eq!(state.shown.topology(), Topology::Axis, "the topology follows the parameters");
+        let p = wait_until(&physics, |p| p.params == Some(axis));
+        assert_eq!(p.params.map(|p| p.topology()), Some(Topology::Axis), "the running model agrees");
+        // Symplectic Euler asked for far above its limit: the policy on the physics side refuses.
+        let limit = p.dt_limit;
+        assert!(limit > 0.0 && limit.is_finite());
+        state.handle(Request::SetIntegrator(Some(Integrator::Symplectic), 3.0 * limit), &mut send);
+        let p = wait_until(&physics, |p| p.integrator.is_some_and(|(_, dt)| dt == 3.0 * limit));
+        assert_eq!(p.integrator.map(|(i, _)| i), Some(Integrator::Prefactored));
+        assert!(p.note.as_deref().is_some_and(|n| n.contains("stability limit")), "{:?}", p.note);
+        // Well below: accepted.
+        state.handle(Request::SetIntegrator(Some(Integrator::Symplectic), 0.3 * limit), &mut send);
+        let p = wait_until(&physics, |p| p.integrator.is_some_and(|(_, dt)| dt == 0.3 * limit));
+        assert_eq!(p.integrator.map(|(i, _)| i), Some(Integrator::Symplectic));
+    }
+
+    #[test]
+    fn object_b_ties_are_imposed_and_a_second_calibration_is_refused() {
+        let (mut state, physics) = started();
+        let mut send = |c| physics.send(c).expect("physics runs");
+        state.settings.object = "B".into();
+        state.handle(Request::LoadObject, &mut send);
+        assert_eq!(state.shown.material.name, "B");
+        let mut edited = state.shown.params;
+        edited.k3 = 2.0 * edited.k2;
+        state.handle(Request::EditParams(edited), &mut send);
+        assert_eq!(state.shown.params.k3, state.shown.params.k2, "k3 = k2 for a transversely isotropic object");
+        state.settings.calib_generations = 1000;
+        state.handle(Request::StartCalibration, &mut send);
+        assert!(state.shown.calibrating);
+        state.handle(Request::StartCalibration, &mut send);
+        assert!(
+            state.shown.note.as_deref().is_some_and(|n| n.contains("already running")),
+            "{:?}",
+            state.shown.note
+        );
+        state.handle(Request::CancelCalibration, &mut send);
+        for _ in 0..5000 {
+            state.poll();
+            if !state.shown.calibrating {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        assert!(!state.shown.calibrating, "cancelled within a generation");
+    }
+}

@@ -1,0 +1,154 @@
+//! The seam between the interactive simulation and a tissue model: [`Tissue`] is what
+//! [`super::Simulation`] (tools, contact, blow-up guard), the physics thread and `simulate` need
+//! of a model, whatever it is. The mass-spring lattices implement it ([`MsmTissue`]); a FEM
+//! model plugs in by implementing it too, without touching the app.
+//!
+//! State is node-wise in structure-of-arrays form: positions `x[c][p]`, velocities `v[c][p]`,
+//! external forces `f_ext[c][p]` (components `c = 0..3`, node `p`), and `free[p]` (1 for a free
+//! node, 0 for a fixed one). Steps must not allocate after their first call.
+
+use super::Integrator;
+use crate::cases::LoadCase;
+use crate::grid::Grid;
+use crate::msm::{Dynamics, MsmModel, MsmParams};
+
+/// A tissue model the interactive simulation can step.
+pub trait Tissue: Send + std::fmt::Debug {
+    /// The grid its nodes lie on.
+    fn grid(&self) -> Grid;
+    /// Mass of the whole cube, kg.
+    fn total_mass(&self) -> f64;
+    /// Positions, metres.
+    fn x(&self) -> &[Vec<f64>; 3];
+    /// Positions, for tools and the guard to write.
+    fn x_mut(&mut self) -> &mut [Vec<f64>; 3];
+    /// Velocities, m/s.
+    fn v(&self) -> &[Vec<f64>; 3];
+    /// Velocities, for tools and the guard to write.
+    fn v_mut(&mut self) -> &mut [Vec<f64>; 3];
+    /// Both at once (contact writes positions and velocities together).
+    fn x_v_mut(&mut self) -> (&mut [Vec<f64>; 3], &mut [Vec<f64>; 3]);
+    /// External nodal forces, newtons (the load case plus the tools).
+    fn f_ext_mut(&mut self) -> &mut [Vec<f64>; 3];
+    /// 1.0 for a free node, 0.0 for a fixed one.
+    fn free(&self) -> &[f64];
+    /// Internal plus external force on every node at the current positions, newtons.
+    fn forces(&mut self) -> &[Vec<f64>; 3];
+    /// One step of `integrator` with time step `dt`.
+    fn step(&mut self, integrator: Integrator, dt: f64) -> Result<(), String>;
+    /// Kinetic energy, joules.
+    fn kinetic_energy(&self) -> f64;
+    /// The critical time step of the explicit integrator (an estimate on the safe side), s.
+    fn explicit_dt_limit(&self) -> f64;
+    /// Fixes and loads nodes as `case` says (the state is kept).
+    fn apply_case(&mut self, case: &LoadCase);
+    /// The running mass-spring parameters, if the model has them.
+    fn params(&self) -> Option<MsmParams>;
+    /// Replaces the parameters, keeping the state (a calibration result applied live).
+    fn set_params(&mut self, params: MsmParams) -> Result<(), String>;
+}
+
+/// A mass-spring lattice as a [`Tissue`].
+#[derive(Debug)]
+pub struct MsmTissue {
+    /// The model.
+    pub model: MsmModel,
+    /// Its state.
+    pub dynamics: Dynamics,
+    density: f64,
+    dt_limit: f64,
+}
+
+impl MsmTissue {
+    /// `model` at rest (built for `density`, kg/m^3).
+    pub fn new(model: MsmModel, density: f64) -> Self {
+        let dynamics = Dynamics::new(&model);
+        let dt_limit = explicit_dt_limit(&model);
+        Self { model, dynamics, density, dt_limit }
+    }
+
+    /// The lattice of `params` on the paper's grid for a material of `density`.
+    pub fn build(params: MsmParams, density: f64) -> Result<Self, crate::msm::ParamError> {
+        Ok(Self::new(MsmModel::new(Grid::paper(), params, density)?, density))
+    }
+}
+
+impl Tissue for MsmTissue {
+    fn grid(&self) -> Grid {
+        self.model.grid
+    }
+    fn total_mass(&self) -> f64 {
+        self.model.node_mass * self.model.grid.num_nodes() as f64
+    }
+    fn x(&self) -> &[Vec<f64>; 3] {
+        &self.dynamics.x
+    }
+    fn x_mut(&mut self) -> &mut [Vec<f64>; 3] {
+        &mut self.dynamics.x
+    }
+    fn v(&self) -> &[Vec<f64>; 3] {
+        &self.dynamics.v
+    }
+    fn v_mut(&mut self) -> &mut [Vec<f64>; 3] {
+        &mut self.dynamics.v
+    }
+    fn x_v_mut(&mut self) -> (&mut [Vec<f64>; 3], &mut [Vec<f64>; 3]) {
+        (&mut self.dynamics.x, &mut self.dynamics.v)
+    }
+    fn f_ext_mut(&mut self) -> &mut [Vec<f64>; 3] {
+        &mut self.dynamics.f_ext
+    }
+    fn free(&self) -> &[f64] {
+        &self.dynamics.free
+    }
+    fn forces(&mut self) -> &[Vec<f64>; 3] {
+        self.dynamics.forces(&self.model)
+    }
+    fn step(&mut self, integrator: Integrator, dt: f64) -> Result<(), String> {
+        match integrator {
+            Integrator::Symplectic => {
+                self.dynamics.step_symplectic(&self.model, dt);
+                Ok(())
+            }
+            Integrator::Implicit => self.dynamics.step_implicit(&self.model, dt).map_err(|e| e.to_string()),
+            Integrator::Prefactored => self.dynamics.step_prefactored(&self.model, dt).map_err(|e| e.to_string()),
+        }
+    }
+    fn kinetic_energy(&self) -> f64 {
+        self.dynamics.kinetic_energy(&self.model)
+    }
+    fn explicit_dt_limit(&self) -> f64 {
+        self.dt_limit
+    }
+    fn apply_case(&mut self, case: &LoadCase) {
+        self.dynamics.apply_case(case);
+    }
+    fn params(&self) -> Option<MsmParams> {
+        Some(self.model.params)
+    }
+    fn set_params(&mut self, params: MsmParams) -> Result<(), String> {
+        self.model = MsmModel::new(self.model.grid, params, self.density).map_err(|e| e.to_string())?;
+        self.dynamics.set_model(&self.model);
+        self.dt_limit = explicit_dt_limit(&self.model);
+        Ok(())
+    }
+}
+
+/// Estimated critical time step of symplectic Euler for a lattice, `2 / omega_max` from
+/// Gershgorin's bound `omega_max^2 <= max_i sum_j |K_ij| / m` on the rest stiffness
+/// (conservative), narrowed by the nodal damping to `2 m / d`.
+pub fn explicit_dt_limit(model: &MsmModel) -> f64 {
+    let mut row = vec![0.0f64; model.grid.num_nodes()];
+    for s in model.springs() {
+        let k = model.families[s.family].stiffness[s.a];
+        let d = model.families[s.family].family.offset.map(|o| f64::from(o.abs()));
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        // Row sums of k d d^T (and its off-diagonal copy) for the worst component.
+        let w = (0..3).map(|c| d[c] / len * (d[0] + d[1] + d[2]) / len).fold(0.0, f64::max);
+        row[s.a] += 2.0 * k * w;
+        row[s.b] += 2.0 * k * w;
+    }
+    let lambda = row.iter().copied().fold(0.0, f64::max) / model.node_mass;
+    let damping_limit = if model.params.d > 0.0 { 2.0 * model.node_mass / model.params.d } else { f64::INFINITY };
+    (2.0 / lambda.sqrt()).min(damping_limit)
+}
