@@ -1,10 +1,20 @@
 //! tissue-sim: an anisotropic soft-tissue cube, simulated by a mass-spring model calibrated
 //! against a linear finite-element reference (Choi, "heuristically parameterized anisotropic
-//! mass-spring model").
+//! mass-spring model"). See `ARCHITECTURE.md` for the layers, threads and rules.
 //!
-//! Data flows one way: [`material`] -> [`fem`] reference -> [`accuracy`] (cost and error tables)
-//! -> [`msm`] parameters -> dynamics. [`grid`] and [`cases`] fix the benchmark's conventions
-//! (`shared/spec/benchmark.md`); [`io`] writes its JSON files; [`cli`] is the command line.
+//! Data flows one way: material -> FEM reference -> cost -> calibration -> model parameters ->
+//! physics thread -> renderer.
+//!
+//! - Core: [`material`] (engineering constants, `S`, `C`), [`grid`] (nodes, elements, spring
+//!   families), [`cases`] (the benchmark's load cases and their answers), [`sparse`] (faer's
+//!   sparse Cholesky), [`fem`] (hex8 statics and dynamics), [`msm`] (the mass-spring lattices),
+//!   [`tissue`] (the shipped calibrated tissues), [`sim`] (the interactive simulation over any
+//!   tissue model), [`calibrate`] (GA+SA), [`accuracy`] (cost and error tables), [`io`] (JSON and
+//!   safe output files).
+//! - Studies: [`study`] (speed against accuracy, stability, choice), [`reproduce`] (the paper's
+//!   tables and figures), [`bench`] (timings), [`script`] (`simulate`).
+//! - Presentation: [`render`] (wgpu renderer, offscreen), [`scene`] (what is drawn).
+//! - [`app`]: the interactive viewer. [`cli`]: the command line.
 
 pub mod accuracy;
 pub mod app;

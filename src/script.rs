@@ -243,39 +243,13 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     let grid = Grid::paper();
     let material = Material::preset(&script.object)
         .ok_or_else(|| anyhow::anyhow!("script: object must be A or B, got {:?}", script.object))?;
-    check("dt", script.dt, true)?;
-    if !(1e-6..=0.05).contains(&script.dt) {
-        anyhow::bail!("script: dt = {} s is out of range (1e-6 to 0.05 s)", script.dt);
-    }
-    if script.actions.len() > MAX_ACTIONS {
-        anyhow::bail!("script: {} actions, above the bound of {MAX_ACTIONS}", script.actions.len());
-    }
-    let recorded = script.actions.iter().filter(|a| a.record()).count() + 1;
-    if recorded > MAX_RECORDED {
-        anyhow::bail!("script: {recorded} actions record positions, above the bound of {MAX_RECORDED}");
-    }
+    check_bounds(script)?;
     let params = tissue_params(&material, script.model)?;
     let tissue = MsmTissue::build(params, material.density)?;
     let integrator = choose_integrator(script.integrator, script.dt, tissue.explicit_dt_limit()).map_err(|why| {
         anyhow::anyhow!("script: {why}; lower dt, or choose \"integrator\": \"prefactored\" (or leave it out)")
     })?;
-    let case: Option<LoadCase> = match script.clamp.as_str() {
-        "none" => None,
-        "bottom" => {
-            let mut c = LoadCase::clamped(&grid, &material.name, 3, 0.0);
-            c.load.fill(0.0);
-            Some(c)
-        }
-        id => {
-            let case = parse_case_id(&grid, id).map_err(|e| anyhow::anyhow!("script: clamp: {e}"))?.1;
-            if case.bc != crate::cases::Bc::Clamped {
-                anyhow::bail!(
-                    "script: clamp: {id} is a patch case; its roller supports hold single components, which the mass-spring model does not represent (use a clamped case)"
-                );
-            }
-            Some(case)
-        }
-    };
+    let case = clamp_case(&grid, &material.name, &script.clamp)?;
     let mut sim = Simulation::with_tissue(Box::new(tissue), integrator, script.dt, case.as_ref());
     let rest = grid.positions();
     let mut out = Outcome {
@@ -289,104 +263,9 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         force_depth: Vec::new(),
         blow_ups: Vec::new(),
     };
-    let steps_for = |d: f64| -> anyhow::Result<u64> {
-        check("duration_s", d, false)?;
-        if d > 100.0 {
-            anyhow::bail!("script: duration_s = {d} s is too long (at most 100 s)");
-        }
-        let steps = (d / script.dt).round();
-        if steps > 1e7 {
-            anyhow::bail!("script: duration_s = {d} s at dt = {} s is more than 1e7 steps", script.dt);
-        }
-        Ok(steps as u64)
-    };
-    // Bounds on the whole script, before any work.
-    let mut total_steps = 0u64;
-    let mut total_samples = 0usize;
-    for (i, a) in script.actions.iter().enumerate() {
-        let n = steps_for(a.duration_s()).map_err(|e| anyhow::anyhow!("action {i}: {e}"))?;
-        total_steps += match a {
-            Action::Release { .. } => 0,
-            Action::Wait { .. } => n,
-            _ => n.max(1),
-        };
-        if let Action::Probe { samples, .. } = a {
-            total_samples += (*samples).clamp(1, 10_000);
-        }
-    }
-    if total_steps > MAX_TOTAL_STEPS {
-        anyhow::bail!(
-            "script: {total_steps} steps in all (at dt = {} s), above the bound of {MAX_TOTAL_STEPS} steps per script",
-            script.dt
-        );
-    }
-    if total_samples > MAX_SAMPLES {
-        anyhow::bail!("script: {total_samples} probe samples in all, above the bound of {MAX_SAMPLES}");
-    }
     let last = script.actions.len().saturating_sub(1);
     for (i, action) in script.actions.iter().enumerate() {
-        let kind;
-        match action {
-            Action::Drag { node, to, duration_s, .. } => {
-                kind = "drag";
-                if *node >= grid.num_nodes() {
-                    anyhow::bail!("script: action {i}: node {node} does not exist (0..{})", grid.num_nodes());
-                }
-                check_point(&format!("action {i}: drag target \"to\""), to)?;
-                let from: [f64; 3] = std::array::from_fn(|c| sim.tissue.x()[c][*node]);
-                let n = steps_for(*duration_s)?.max(1);
-                for s in 1..=n {
-                    let f = s as f64 / n as f64;
-                    sim.tool =
-                        Tool::Drag { node: *node, target: std::array::from_fn(|c| from[c] + f * (to[c] - from[c])) };
-                    step(&mut sim, &mut out)?;
-                }
-            }
-            Action::Probe { at, direction, radius, depth, duration_s, samples, .. } => {
-                kind = "probe";
-                check("radius", *radius, true)?;
-                check("depth", *depth, false)?;
-                let l = crate::grid::CUBE_SIDE_M;
-                if *radius > l || *depth > l {
-                    anyhow::bail!(
-                        "script: action {i}: probe radius {} m and depth {} m must each be at most the cube's side \
-                         ({l} m); sizes are metres",
-                        crate::io::num(*radius),
-                        crate::io::num(*depth)
-                    );
-                }
-                check_point(&format!("action {i}: probe point \"at\""), at)?;
-                let len = direction.iter().map(|d| d * d).sum::<f64>().sqrt();
-                if !(len.is_finite() && len > 0.0) {
-                    anyhow::bail!("script: action {i}: probe needs a finite, non-zero direction");
-                }
-                let dir = direction.map(|d| d / len);
-                let n = steps_for(*duration_s)?.max(1);
-                let samples = (*samples).clamp(1, 10_000) as u64;
-                for s in 1..=n {
-                    let d = depth * s as f64 / n as f64;
-                    let centre = std::array::from_fn(|c| at[c] - radius * dir[c] + d * dir[c]);
-                    sim.tool = Tool::Probe { centre, radius: *radius };
-                    step(&mut sim, &mut out)?;
-                    if s * samples % n < samples {
-                        let f = sim.tool_force;
-                        let along = -(f[0] * dir[0] + f[1] * dir[1] + f[2] * dir[2]);
-                        out.force_depth.push(ProbeSample { action: i, depth_m: d, force_n: along });
-                    }
-                }
-            }
-            Action::Release { .. } => {
-                kind = "release";
-                sim.tool = Tool::None;
-                sim.tool_force = [0.0; 3];
-            }
-            Action::Wait { duration_s, .. } => {
-                kind = "wait";
-                for _ in 0..steps_for(*duration_s)? {
-                    step(&mut sim, &mut out)?;
-                }
-            }
-        }
+        let kind = run_action(script.dt, i, action, &mut sim, &mut out)?;
         let x = sim.tissue.x();
         let position = |p: usize| -> [f64; 3] { std::array::from_fn(|c| x[c][p]) };
         let max_displacement_m = rest
@@ -408,6 +287,164 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         });
     }
     Ok(out)
+}
+
+/// Steps of an action lasting `d` seconds at `dt`.
+fn steps_for(d: f64, dt: f64) -> anyhow::Result<u64> {
+    check("duration_s", d, false)?;
+    if d > 100.0 {
+        anyhow::bail!("script: duration_s = {d} s is too long (at most 100 s)");
+    }
+    let steps = (d / dt).round();
+    if steps > 1e7 {
+        anyhow::bail!("script: duration_s = {d} s at dt = {dt} s is more than 1e7 steps");
+    }
+    Ok(steps as u64)
+}
+
+/// The bounds on the whole script, checked before any work.
+fn check_bounds(script: &Script) -> anyhow::Result<()> {
+    check("dt", script.dt, true)?;
+    if !(1e-6..=0.05).contains(&script.dt) {
+        anyhow::bail!("script: dt = {} s is out of range (1e-6 to 0.05 s)", script.dt);
+    }
+    if script.actions.len() > MAX_ACTIONS {
+        anyhow::bail!("script: {} actions, above the bound of {MAX_ACTIONS}", script.actions.len());
+    }
+    let recorded = script.actions.iter().filter(|a| a.record()).count() + 1;
+    if recorded > MAX_RECORDED {
+        anyhow::bail!("script: {recorded} actions record positions, above the bound of {MAX_RECORDED}");
+    }
+    let mut total_steps = 0u64;
+    let mut total_samples = 0usize;
+    for (i, a) in script.actions.iter().enumerate() {
+        let n = steps_for(a.duration_s(), script.dt).map_err(|e| anyhow::anyhow!("action {i}: {e}"))?;
+        total_steps += match a {
+            Action::Release { .. } => 0,
+            Action::Wait { .. } => n,
+            _ => n.max(1),
+        };
+        if let Action::Probe { samples, .. } = a {
+            total_samples += (*samples).clamp(1, 10_000);
+        }
+    }
+    if total_steps > MAX_TOTAL_STEPS {
+        anyhow::bail!(
+            "script: {total_steps} steps in all (at dt = {} s), above the bound of {MAX_TOTAL_STEPS} steps per script",
+            script.dt
+        );
+    }
+    if total_samples > MAX_SAMPLES {
+        anyhow::bail!("script: {total_samples} probe samples in all, above the bound of {MAX_SAMPLES}");
+    }
+    Ok(())
+}
+
+/// The fixed nodes and loads a script's `clamp` names.
+fn clamp_case(grid: &Grid, object: &str, clamp: &str) -> anyhow::Result<Option<LoadCase>> {
+    Ok(match clamp {
+        "none" => None,
+        "bottom" => {
+            let mut c = LoadCase::clamped(grid, object, 3, 0.0);
+            c.load.fill(0.0);
+            Some(c)
+        }
+        id => {
+            let case = parse_case_id(grid, id).map_err(|e| anyhow::anyhow!("script: clamp: {e}"))?.1;
+            if case.bc != crate::cases::Bc::Clamped {
+                anyhow::bail!(
+                    "script: clamp: {id} is a patch case; its roller supports hold single components, which the \
+                     mass-spring model does not represent (use a clamped case)"
+                );
+            }
+            Some(case)
+        }
+    })
+}
+
+/// Runs action `i`; returns its kind.
+fn run_action(
+    dt: f64,
+    i: usize,
+    action: &Action,
+    sim: &mut Simulation,
+    out: &mut Outcome,
+) -> anyhow::Result<&'static str> {
+    match action {
+        Action::Drag { node, to, duration_s, .. } => {
+            let nodes = sim.tissue.grid().num_nodes();
+            if *node >= nodes {
+                anyhow::bail!("script: action {i}: node {node} does not exist (0..{nodes})");
+            }
+            check_point(&format!("action {i}: drag target \"to\""), to)?;
+            let from: [f64; 3] = std::array::from_fn(|c| sim.tissue.x()[c][*node]);
+            let n = steps_for(*duration_s, dt)?.max(1);
+            for s in 1..=n {
+                let f = s as f64 / n as f64;
+                sim.tool = Tool::Drag { node: *node, target: std::array::from_fn(|c| from[c] + f * (to[c] - from[c])) };
+                step(sim, out)?;
+            }
+            Ok("drag")
+        }
+        Action::Probe { at, direction, radius, depth, duration_s, samples, .. } => {
+            probe(dt, i, (*at, *direction, *radius, *depth), *duration_s, *samples, sim, out)?;
+            Ok("probe")
+        }
+        Action::Release { .. } => {
+            sim.tool = Tool::None;
+            sim.tool_force = [0.0; 3];
+            Ok("release")
+        }
+        Action::Wait { duration_s, .. } => {
+            for _ in 0..steps_for(*duration_s, dt)? {
+                step(sim, out)?;
+            }
+            Ok("wait")
+        }
+    }
+}
+
+/// A probe action: `(at, direction, radius, depth)` in metres.
+fn probe(
+    dt: f64,
+    i: usize,
+    (at, direction, radius, depth): ([f64; 3], [f64; 3], f64, f64),
+    duration_s: f64,
+    samples: usize,
+    sim: &mut Simulation,
+    out: &mut Outcome,
+) -> anyhow::Result<()> {
+    check("radius", radius, true)?;
+    check("depth", depth, false)?;
+    let l = crate::grid::CUBE_SIDE_M;
+    if radius > l || depth > l {
+        anyhow::bail!(
+            "script: action {i}: probe radius {} m and depth {} m must each be at most the cube's side ({l} m); \
+             sizes are metres",
+            crate::io::num(radius),
+            crate::io::num(depth)
+        );
+    }
+    check_point(&format!("action {i}: probe point \"at\""), &at)?;
+    let len = direction.iter().map(|d| d * d).sum::<f64>().sqrt();
+    if !(len.is_finite() && len > 0.0) {
+        anyhow::bail!("script: action {i}: probe needs a finite, non-zero direction");
+    }
+    let dir = direction.map(|d| d / len);
+    let n = steps_for(duration_s, dt)?.max(1);
+    let samples = samples.clamp(1, 10_000) as u64;
+    for s in 1..=n {
+        let d = depth * s as f64 / n as f64;
+        let centre = std::array::from_fn(|c| at[c] - radius * dir[c] + d * dir[c]);
+        sim.tool = Tool::Probe { centre, radius };
+        step(sim, out)?;
+        if s * samples % n < samples {
+            let f = sim.tool_force;
+            let along = -(f[0] * dir[0] + f[1] * dir[1] + f[2] * dir[2]);
+            out.force_depth.push(ProbeSample { action: i, depth_m: d, force_n: along });
+        }
+    }
+    Ok(())
 }
 
 /// One step; a blow-up is listed, and one the guard gave up on stops the script.

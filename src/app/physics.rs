@@ -116,12 +116,27 @@ pub struct PhysicsThread {
 }
 
 impl PhysicsThread {
-    /// Starts stepping `sim`.
-    pub fn spawn(sim: Simulation) -> std::io::Result<Self> {
+    /// Starts the thread: it builds the first simulation from `first` and steps it.
+    pub fn spawn(first: Replacement) -> std::io::Result<Self> {
         let (tx, rx) = channel();
         let shared = Arc::new(Mutex::new(Published::default()));
         let out = Arc::clone(&shared);
-        let worker = Worker::spawn("physics", || {}, move |ctx| run(sim, &rx, &out, ctx))?;
+        let worker = Worker::spawn("physics", || {}, move |ctx| {
+            let sim = match (first.recipe)() {
+                Ok(tissue) => {
+                    let mut sim = Simulation::with_tissue(tissue, Integrator::Prefactored, first.dt, Some(&first.case));
+                    let note = sim.set_integrator(first.integrator, first.dt);
+                    (sim, note)
+                }
+                Err(e) => {
+                    if let Ok(mut p) = out.lock() {
+                        p.note = Some(format!("cannot build the model: {e}"));
+                    }
+                    return;
+                }
+            };
+            run(sim, &rx, &out, ctx);
+        })?;
         Ok(Self { tx, shared, worker })
     }
 
@@ -232,10 +247,10 @@ fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop,
     }
 }
 
-fn run(mut sim: Simulation, rx: &Receiver<Command>, out: &Mutex<Published>, ctx: &Context<()>) {
+fn run((mut sim, note): (Simulation, Option<String>), rx: &Receiver<Command>, out: &Mutex<Published>, ctx: &Context<()>) {
     let start = Instant::now();
     let mut next = start;
-    let mut state = Loop { message: None, note: None, tools: 0, paused: false, owed: 0.0 };
+    let mut state = Loop { message: None, note, tools: 0, paused: false, owed: 0.0 };
     let (mut window_start, mut ticks, mut steps, mut busy) = (Instant::now(), 0u64, 0u64, Duration::ZERO);
     let mut sim_at_window = sim.time_s;
     let mut rates = Rates::default();

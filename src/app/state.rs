@@ -295,8 +295,7 @@ impl ViewerState {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::app::physics::{Published, PhysicsThread};
-    use crate::sim::Simulation;
+    use crate::app::physics::{PhysicsThread, Published};
 
     fn wait_until(physics: &PhysicsThread, mut ok: impl FnMut(&Published) -> bool) -> Published {
         let mut p = Published::default();
@@ -312,14 +311,7 @@ mod tests {
 
     fn started() -> (ViewerState, PhysicsThread) {
         let (state, first) = ViewerState::new(|| {}).expect("state");
-        let placeholder = Simulation::with_tissue(
-            Box::new(MsmTissue::build(state.shown.params, state.shown.material.density).expect("model")),
-            Integrator::Symplectic,
-            1e-4,
-            None,
-        );
-        let physics = PhysicsThread::spawn(placeholder).expect("physics");
-        physics.send(Command::Replace(first)).expect("send");
+        let physics = PhysicsThread::spawn(first).expect("physics");
         (state, physics)
     }
 

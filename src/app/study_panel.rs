@@ -83,44 +83,7 @@ impl StudyPanel {
             ui.label(format!("no chart for object {object} yet"));
             return;
         }
-        Plot::new("speed_accuracy")
-            .height(240.0)
-            .allow_scroll(false)
-            .allow_zoom(false)
-            .allow_drag(false)
-            .legend(Legend::default().position(Corner::LeftBottom).background_alpha(0.6))
-            .x_axis_label("log10 time per step (s); circle explicit, triangle implicit")
-            .y_axis_label("log10 avg error (% of h)")
-            .show(ui, |plot| {
-                for (i, kind) in ModelKind::ALL.iter().enumerate() {
-                    let name = kind.name();
-                    for (integrator, shape) in [("explicit", MarkerShape::Circle), ("implicit", MarkerShape::Up)] {
-                        let pts: Vec<[f64; 2]> = mine
-                            .iter()
-                            .filter(|p| p.model == name && p.integrator == integrator)
-                            .map(|p| [p.step_s.log10(), p.avg_err_pct.log10()])
-                            .collect();
-                        plot.points(
-                            // One legend entry per model: circles explicit, triangles implicit.
-                            Points::new(name.clone(), PlotPoints::from(pts))
-                                .shape(shape)
-                                .radius(4.0)
-                                .color(COLOURS[i % COLOURS.len()]),
-                        );
-                    }
-                }
-                // Rings around the Pareto points (a polyline's sharp corners render as spikes
-                // without feathering on software adapters).
-                let front: Vec<[f64; 2]> =
-                    mine.iter().filter(|p| p.pareto).map(|p| [p.step_s.log10(), p.avg_err_pct.log10()]).collect();
-                plot.points(
-                    Points::new("Pareto front", PlotPoints::from(front))
-                        .shape(MarkerShape::Circle)
-                        .filled(false)
-                        .radius(7.0)
-                        .color(egui::Color32::LIGHT_GRAY),
-                );
-            });
+        speed_accuracy_plot(ui, &mine);
         ui.horizontal(|ui| {
             ui.label("error budget");
             ui.add(egui::DragValue::new(&mut self.max_error).speed(0.01).range(0.001..=100.0).suffix(" % of h"));
@@ -177,4 +140,47 @@ impl StudyPanel {
             self.status = format!("the chart thread stopped unexpectedly ({why})");
         }
     }
+}
+
+/// The chart: log time per step against log average error, a colour per model, circles explicit,
+/// triangles implicit, the Pareto points ringed.
+fn speed_accuracy_plot(ui: &mut egui::Ui, mine: &[&ChartPoint]) {
+    Plot::new("speed_accuracy")
+        .height(240.0)
+        .allow_scroll(false)
+        .allow_zoom(false)
+        .allow_drag(false)
+        .legend(Legend::default().position(Corner::LeftBottom).background_alpha(0.6))
+        .x_axis_label("log10 time per step (s); circle explicit, triangle implicit")
+        .y_axis_label("log10 avg error (% of h)")
+        .show(ui, |plot| {
+            for (i, kind) in ModelKind::ALL.iter().enumerate() {
+                let name = kind.name();
+                for (integrator, shape) in [("explicit", MarkerShape::Circle), ("implicit", MarkerShape::Up)] {
+                    let pts: Vec<[f64; 2]> = mine
+                        .iter()
+                        .filter(|p| p.model == name && p.integrator == integrator)
+                        .map(|p| [p.step_s.log10(), p.avg_err_pct.log10()])
+                        .collect();
+                    plot.points(
+                        // One legend entry per model: circles explicit, triangles implicit.
+                        Points::new(name.clone(), PlotPoints::from(pts))
+                            .shape(shape)
+                            .radius(4.0)
+                            .color(COLOURS[i % COLOURS.len()]),
+                    );
+                }
+            }
+            // Rings around the Pareto points (a polyline's sharp corners render as spikes
+            // without feathering on software adapters).
+            let front: Vec<[f64; 2]> =
+                mine.iter().filter(|p| p.pareto).map(|p| [p.step_s.log10(), p.avg_err_pct.log10()]).collect();
+            plot.points(
+                Points::new("Pareto front", PlotPoints::from(front))
+                    .shape(MarkerShape::Circle)
+                    .filled(false)
+                    .radius(7.0)
+                    .color(egui::Color32::LIGHT_GRAY),
+            );
+        });
 }

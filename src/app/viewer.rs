@@ -21,7 +21,6 @@ use crate::render::camera::OrbitCamera;
 use crate::render::gpu::SurfaceStyle;
 use crate::render::mesh::SurfaceMesh;
 use crate::scene::ColourMode;
-use crate::sim::{Integrator, MsmTissue, Simulation};
 
 /// A wake-up from a background thread (egui asked for a repaint).
 #[derive(Debug, Clone, Copy)]
@@ -72,11 +71,8 @@ impl App {
         let repaint = egui.clone();
         let (state, first) = ViewerState::new(move || repaint.request_repaint())?;
         let grid = state.grid();
-        // The thread starts on a placeholder at rest and builds the real tissue from its recipe.
-        let placeholder = MsmTissue::build(state.shown.params, state.shown.material.density)?;
-        let sim = Simulation::with_tissue(Box::new(placeholder), Integrator::Prefactored, first.dt, Some(&first.case));
-        let physics = PhysicsThread::spawn(sim).context("cannot start the physics thread")?;
-        physics.send(Command::Replace(first)).context("the physics thread did not start")?;
+        // The physics thread builds the model from its recipe: none is built here.
+        let physics = PhysicsThread::spawn(first).context("cannot start the physics thread")?;
         Ok(Self {
             surface: None,
             egui,

@@ -213,12 +213,12 @@ impl Simulation {
     /// Back to rest (positions and velocities), keeping fixed nodes and loads; the guard's count
     /// starts again.
     pub fn reset(&mut self) {
-        self.to_rest();
+        self.back_to_rest();
         self.recoveries = 0;
         self.last_blow_up_s = f64::NEG_INFINITY;
     }
 
-    fn to_rest(&mut self) {
+    fn back_to_rest(&mut self) {
         let (x, v) = self.tissue.x_v_mut();
         for c in 0..3 {
             x[c].copy_from_slice(&self.rest[c]);
@@ -300,7 +300,7 @@ impl Simulation {
                 }
                 self.time_s = t;
             }
-            None => self.to_rest(),
+            None => self.back_to_rest(),
         }
         self.tool = Tool::None;
         self.tool_force = [0.0; 3];

@@ -85,7 +85,7 @@ pub fn read_chart_csv(path: &Path) -> anyhow::Result<Vec<ChartPoint>> {
                 return Err(bad(format!("{name} = {v} must be a positive time in seconds")));
             }
         }
-        if !(p.dt_max_s > 0.0) {
+        if p.dt_max_s.is_nan() || p.dt_max_s <= 0.0 {
             return Err(bad(format!("dt_max_s = {} must be positive (inf for implicit)", p.dt_max_s)));
         }
         for (name, v) in [("avg_err_pct", p.avg_err_pct), ("max_err_pct", p.max_err_pct)] {
