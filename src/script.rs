@@ -32,7 +32,7 @@ use crate::cases::{LoadCase, parse_case_id};
 use crate::grid::Grid;
 use crate::material::Material;
 use crate::msm::{MsmModel, Topology};
-use crate::scene::tissue_params;
+use crate::tissue::tissue_params;
 use crate::sim::{Integrator, Simulation, Tool};
 
 /// A script.

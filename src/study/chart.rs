@@ -25,7 +25,7 @@ use crate::fem::{CaseSolution, FemModel};
 use crate::grid::{CUBE_SIDE_M, Grid};
 use crate::material::Material;
 use crate::msm::{Dynamics, MsmModel, MsmParams, Topology, statics};
-use crate::scene::tissue_params;
+use crate::tissue::tissue_params;
 
 /// Nodes per axis of the reference FEM.
 pub const REFERENCE_N: usize = 40;
