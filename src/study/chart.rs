@@ -18,10 +18,10 @@
 use std::time::Instant;
 
 use crate::bench::{time_fallible, time_per_call};
-use crate::cases::LoadCase;
+use crate::cases::{CaseSolution, LoadCase};
+use crate::fem::FemModel;
 use crate::fem::clamped::ClampedSolver;
 use crate::fem::dynamics::{FemDynamics, Formulation};
-use crate::fem::{CaseSolution, FemModel};
 use crate::grid::{CUBE_SIDE_M, Grid};
 use crate::material::Material;
 use crate::msm::{Dynamics, MsmModel, MsmParams, Topology, statics};
