@@ -3,11 +3,10 @@
 
 use anyhow::Context as _;
 
-use crate::calibrate::Problem;
 use crate::cases::parse_case_id;
 use crate::grid::Grid;
 use crate::material::Material;
-use crate::msm::Topology;
+use crate::msm::{MsmModel, Topology};
 use crate::render::camera::OrbitCamera;
 use crate::render::gpu::{LineVertex, SurfaceStyle};
 use crate::render::mesh::SurfaceMesh;
@@ -73,8 +72,7 @@ impl StaticScene {
         let material = Material::preset(&object)
             .with_context(|| format!("case {id}: unknown object {object:?} (the presets are A and B)"))?;
         let params = tissue_params(&material, topology)?;
-        let problem = Problem::new(material, grid, topology)?;
-        let model = problem.model(&params)?;
+        let model = MsmModel::new(grid, params, material.density)?;
         let u = crate::msm::statics::equilibrium(&model, &case)?;
         let largest = u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()).fold(0.0, f64::max);
         let side = crate::grid::CUBE_SIDE_M;
@@ -97,8 +95,7 @@ impl StaticScene {
                 Some(u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() as f32).collect())
             }
             ColourMode::Error => {
-                let fem =
-                    crate::fem::FemModel::new(grid, &problem.material).solve_cases(std::slice::from_ref(&case))?;
+                let fem = crate::fem::FemModel::new(grid, &material).solve_cases(std::slice::from_ref(&case))?;
                 Some(
                     u.iter()
                         .zip(&fem[0].displacements)
