@@ -8,7 +8,7 @@ use crate::grid::{CUBE_SIDE_M, Grid};
 pub const FORCES_N: [f64; 3] = [1.0, 5.0, 10.0];
 
 /// Boundary-condition family of a case.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Bc {
     /// Face `x_a = 0` fully fixed, equal nodal forces `F / n^2` on face `x_a = L`.

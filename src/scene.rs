@@ -18,7 +18,7 @@ use crate::render::{fixed_outline, lattice_edges, normalise};
 pub use crate::tissue::tissue_params;
 
 /// Per-node colour map.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ColourMode {
     /// Plain shading.

@@ -27,7 +27,7 @@ pub use genes::GeneSpace;
 use crate::msm::{MsmParams, Topology};
 
 /// The search method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// GA with Metropolis screening of crossover (XSA) and mutation (MSA): the paper's method.
@@ -39,7 +39,7 @@ pub enum Method {
 }
 
 /// What the cost compares.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum CostMode {
     /// Static equilibria (the paper's cost; `d` is not identified).

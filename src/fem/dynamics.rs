@@ -16,7 +16,7 @@ use super::element::NODE_SIGNS;
 use crate::sparse::{SparseError, SpdSystem};
 
 /// How element forces are computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Formulation {
     /// Small-strain linear elasticity, `f = -K u`.

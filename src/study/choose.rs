@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use super::chart::ChartPoint;
 
 /// Which error the budget bounds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Metric {
     /// The worst node (the default: a budget holds everywhere).
     Max,
