@@ -203,8 +203,8 @@ pub fn calibrate(
     settings.validate().map_err(CalibrationError::Settings)?;
     let start = Instant::now();
     let outcome = match settings.method {
-        Method::Hybrid | Method::Ga => search::genetic(problem, space, settings, cancel, on_generation)?,
-        Method::Sa => search::annealing(problem, space, settings, cancel, on_generation)?,
+        Method::Hybrid | Method::Ga => search::genetic(problem, space, settings, cancel, on_generation),
+        Method::Sa => search::annealing(problem, space, settings, cancel, on_generation),
     };
     let mut params = space.params(&outcome.best);
     let (d_crit, omega) = damping::critical_damping(&problem.model(&params).map_err(CostError::from)?)?;
