@@ -1,7 +1,7 @@
 //! How far a mass-spring answer is from the FEM reference: the paper's cost (eq. 1) and its error
 //! tables (Tables IV and V: average and maximum nodal distance per case, in percent of `h`).
 
-use crate::fem::CaseSolution;
+use crate::cases::CaseSolution;
 
 /// Error of one case.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]

@@ -107,7 +107,7 @@ pub fn run() -> anyhow::Result<BenchReport> {
     for n in [8, 16] {
         msm_implicit_step_s.insert(n, implicit_step(n, paper_params(), false)?);
     }
-    let hex = crate::scene::tissue_params(&Material::object_a(), crate::msm::Topology::Hex)?;
+    let hex = crate::tissue::tissue_params(&Material::object_a(), crate::msm::Topology::Hex)?;
     let mut msm_prefactored_step_s = BTreeMap::new();
     let mut msm_hex_prefactored_step_s = BTreeMap::new();
     for n in [8, 16, 32] {

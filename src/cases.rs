@@ -1,5 +1,6 @@
 //! The paper's benchmark load cases (`shared/spec/benchmark.md`): 9 clamped cases per object
-//! (axis 1, 2, 3 x force 1, 5, 10 N) and 9 patch cases with an exact uniform-strain answer.
+//! (axis 1, 2, 3 x force 1, 5, 10 N) and 9 patch cases with an exact uniform-strain answer; and
+//! [`CaseSolution`], the answer of a case, whichever model solved it.
 
 use crate::grid::{CUBE_SIDE_M, Grid};
 
@@ -7,7 +8,7 @@ use crate::grid::{CUBE_SIDE_M, Grid};
 pub const FORCES_N: [f64; 3] = [1.0, 5.0, 10.0];
 
 /// Boundary-condition family of a case.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Bc {
     /// Face `x_a = 0` fully fixed, equal nodal forces `F / n^2` on face `x_a = L`.
@@ -117,6 +118,21 @@ impl LoadCase {
     pub fn fixed_nodes(&self) -> Vec<bool> {
         self.fixed.chunks_exact(3).map(|c| c.iter().all(|&f| f)).collect()
     }
+}
+
+/// The answer of one load case (FEM or mass-spring).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaseSolution {
+    /// Spec case id.
+    pub case_id: String,
+    /// Loaded axis, 1-based.
+    pub axis: usize,
+    /// Applied force, newtons.
+    pub force_n: f64,
+    /// Nodal displacements, metres, row = node.
+    pub displacements: Vec<[f64; 3]>,
+    /// Sum of the support reactions `K u - f` over the fixed degrees of freedom, newtons.
+    pub reaction_n: [f64; 3],
 }
 
 /// Parses a case id such as `A_clamped_ax1_F10` into its object label and case on `grid`.

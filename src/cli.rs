@@ -10,10 +10,68 @@ use crate::accuracy::{case_errors, cost, format_table};
 use crate::calibrate::{CostMode, GeneSpace, Method, Problem, Settings, calibrate};
 use crate::cases::{Bc, benchmark_cases};
 use crate::fem::FemModel;
+use crate::fem::dynamics::Formulation;
 use crate::grid::Grid;
 use crate::io::{CaseRecord, DisplacementFile, read_json, write_atomic, write_json_atomic};
 use crate::material::Material;
 use crate::msm::{MsmModel, MsmParams, Topology, statics};
+use crate::scene::ColourMode;
+use crate::study::choose::Metric;
+
+/// Implements [`clap::ValueEnum`] for a core enum, so that clap stays in the command-line layer:
+/// each variant with its command-line name and its help (the variant's doc, as clap's derive
+/// showed it).
+macro_rules! value_enum {
+    ($ty:ident { $($variant:ident => $name:literal, $help:literal;)+ }) => {
+        impl clap::ValueEnum for $ty {
+            fn value_variants<'a>() -> &'a [Self] {
+                &[$($ty::$variant),+]
+            }
+
+            fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+                Some(match self {
+                    $($ty::$variant => clap::builder::PossibleValue::new($name).help($help),)+
+                })
+            }
+        }
+    };
+}
+
+value_enum!(Formulation {
+    Linear => "linear", "Small-strain linear elasticity, `f = -K u`";
+    Corotational => "corotational", "Corotational: linear elasticity in each element's rotated frame";
+});
+value_enum!(Bc {
+    Clamped => "clamped", "Face `x_a = 0` fully fixed, equal nodal forces `F / n^2` on face `x_a = L`";
+    Patch => "patch", "Roller supports removing rigid motion only, consistent nodal loads of a uniform traction";
+});
+value_enum!(Topology {
+    Axis => "axis", "The paper's model: axis-aligned structural springs only (no shear stiffness)";
+    Shear => "shear", "Axis springs plus both diagonals of every lattice square, one stiffness per plane";
+    Hex => "hex",
+        "The springs of every hex element: its 12 edges, 12 face diagonals and 4 body diagonals, one stiffness per \
+         family group (`k1..k3`, `c12..c23`, `b`). A spring shared by several elements gets each element's share, so \
+         springs on the surface are softer than inside (an edge spring on a face has half, on a cube edge a quarter of \
+         an interior one's stiffness). Calibrated, it is the most accurate lattice here: see the `reproduce` report";
+});
+value_enum!(Method {
+    Hybrid => "hybrid", "GA with Metropolis screening of crossover (XSA) and mutation (MSA): the paper's method";
+    Ga => "ga", "Plain GA, same operators and settings, no screening";
+    Sa => "sa", "Simulated annealing alone: `sa_iterations` moves at each of `generations` temperatures";
+});
+value_enum!(CostMode {
+    Static => "static", "Static equilibria (the paper's cost; `d` is not identified)";
+    Transient => "transient", "The state a fixed time after a step load from rest (see [`transient`]); identifies `d`";
+});
+value_enum!(ColourMode {
+    None => "none", "Plain shading";
+    Displacement => "displacement", "Displacement magnitude";
+    Error => "error", "Distance between the MSM and the FEM answer of the case";
+});
+value_enum!(Metric {
+    Max => "max", "The worst node (the default: a budget holds everywhere)";
+    Avg => "avg", "The average over nodes (the paper's headline figure)";
+});
 
 /// tissue-sim: anisotropic soft-tissue cube, FEM reference and calibrated mass-spring model.
 #[derive(Debug, Parser)]
@@ -147,7 +205,7 @@ pub enum Command {
         object: String,
         /// Which error the budget bounds.
         #[arg(long, value_enum, default_value = "max")]
-        metric: crate::study::choose::Metric,
+        metric: Metric,
         /// A chart.csv written by `tissue-sim chart` (otherwise the chart of this object is computed, about a minute).
         #[arg(long, value_name = "FILE.csv")]
         chart: Option<PathBuf>,
@@ -169,7 +227,7 @@ pub enum Command {
         case: Option<String>,
         /// Colour map: none, displacement magnitude, or MSM-vs-FEM error.
         #[arg(long, value_enum, default_value = "displacement")]
-        colour: crate::scene::ColourMode,
+        colour: ColourMode,
         /// MSM: the calibrated shear-spring tissue (default), the hex-element lattice or the paper's axis springs.
         #[arg(long, value_enum, default_value = "shear")]
         model: Topology,
@@ -629,3 +687,29 @@ fn errors(material: &Material, params: MsmParams, grid: Grid, json: bool) -> any
     Ok(())
 }
 
+#[cfg(test)]
+mod tests {
+    use clap::{CommandFactory as _, ValueEnum};
+
+    use super::*;
+
+    /// Command-line names are those of the files (`name()`) and of serde.
+    #[test]
+    fn value_names_match_the_core_names() {
+        fn check<T: ValueEnum + serde::Serialize>(name: impl Fn(&T) -> String) {
+            for v in T::value_variants() {
+                let value = v.to_possible_value().expect("not skipped");
+                assert_eq!(value.get_name(), name(v));
+                assert_eq!(serde_json::to_value(v).expect("serialises"), value.get_name());
+            }
+        }
+        check::<Formulation>(|v| v.name().into());
+        check::<Bc>(|v| v.name().into());
+        check::<Topology>(|v| v.name().into());
+        check::<Method>(|v| format!("{v:?}").to_lowercase());
+        check::<CostMode>(|v| format!("{v:?}").to_lowercase());
+        check::<ColourMode>(|v| format!("{v:?}").to_lowercase());
+        assert_eq!(Metric::value_variants().len(), 2);
+        Cli::command().debug_assert();
+    }
+}

@@ -213,41 +213,6 @@ impl Grid {
         s.unsigned_abs() as usize
     }
 
-    /// A nested-dissection elimination order of the nodes: each box is split across its longest
-    /// side by a plane of nodes, the two halves are ordered first (recursively), the separating
-    /// plane last. For a 3D grid this fills a sparse Cholesky factor less than minimum degree.
-    pub fn nested_dissection(&self) -> Vec<usize> {
-        fn split(g: &Grid, lo: [usize; 3], hi: [usize; 3], out: &mut Vec<usize>) {
-            let ext = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
-            if ext.contains(&0) {
-                return;
-            }
-            let a = (0..3).max_by_key(|&a| ext[a]).unwrap_or(0);
-            if ext[a] <= 2 {
-                for k in lo[2]..hi[2] {
-                    for j in lo[1]..hi[1] {
-                        for i in lo[0]..hi[0] {
-                            out.push(g.node(i, j, k));
-                        }
-                    }
-                }
-                return;
-            }
-            let mid = lo[a] + ext[a] / 2;
-            let (mut left_hi, mut right_lo, mut sep_lo, mut sep_hi) = (hi, lo, lo, hi);
-            left_hi[a] = mid;
-            right_lo[a] = mid + 1;
-            sep_lo[a] = mid;
-            sep_hi[a] = mid + 1;
-            split(g, lo, left_hi, out);
-            split(g, right_lo, hi, out);
-            split(g, sep_lo, sep_hi, out);
-        }
-        let mut out = Vec::with_capacity(self.num_nodes());
-        split(self, [0; 3], [self.n; 3], &mut out);
-        out
-    }
-
     /// The springs of a family as node pairs `(p, q)` with `p < q`.
     pub fn springs(&self, fam: SpringFamily) -> Vec<(usize, usize)> {
         let s = self.linear_offset(fam);
@@ -309,16 +274,6 @@ mod tests {
                 let l: f64 = (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt();
                 assert!((l - g.h() * 2f64.sqrt()).abs() < 1e-12);
             }
-        }
-    }
-
-    #[test]
-    fn nested_dissection_is_a_permutation() {
-        for n in [2, 3, 8, 9] {
-            let g = Grid::new(n).unwrap();
-            let mut order = g.nested_dissection();
-            order.sort_unstable();
-            assert_eq!(order, (0..g.num_nodes()).collect::<Vec<_>>());
         }
     }
 

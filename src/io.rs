@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::fem::CaseSolution;
+use crate::cases::CaseSolution;
 
 /// One case of a displacement file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

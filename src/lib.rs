@@ -34,3 +34,4 @@ pub mod script;
 pub mod sim;
 pub mod sparse;
 pub mod study;
+pub mod tissue;

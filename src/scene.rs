@@ -3,19 +3,22 @@
 
 use anyhow::Context as _;
 
-use crate::calibrate::Problem;
 use crate::cases::parse_case_id;
 use crate::grid::Grid;
 use crate::material::Material;
-use crate::msm::{MsmParams, Topology};
+use crate::msm::{MsmModel, Topology};
 use crate::render::camera::OrbitCamera;
 use crate::render::gpu::{LineVertex, SurfaceStyle};
 use crate::render::mesh::SurfaceMesh;
 use crate::render::offscreen::{Headless, encode_png};
 use crate::render::{fixed_outline, lattice_edges, normalise};
 
+/// Re-exported for the app layer, which still imports it from here; the tissues live in
+/// [`crate::tissue`].
+use crate::tissue::tissue_params;
+
 /// Per-node colour map.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ColourMode {
     /// Plain shading.
@@ -24,35 +27,6 @@ pub enum ColourMode {
     Displacement,
     /// Distance between the MSM and the FEM answer of the case.
     Error,
-}
-
-/// The calibrated tissue parameters shipped in `assets/` for object `A` or `B`: the shear-spring
-/// model (the viewer's default), the hex-element model or the paper's axis-spring model, all calibrated by this program
-/// (hybrid GA+SA, seed 1, static cost; see each file's `note`).
-pub fn tissue_params(material: &Material, topology: Topology) -> anyhow::Result<MsmParams> {
-    let is_preset = Material::preset(&material.name)
-        .is_some_and(|p| p.constants == material.constants && p.density == material.density);
-    if !is_preset {
-        anyhow::bail!(
-            "no calibrated tissue is shipped for material {:?} (only the presets A and B); calibrate one",
-            material.name
-        );
-    }
-    let text = match (material.name.as_str(), topology) {
-        ("A", Topology::Shear) => include_str!("../assets/tissue_A_shear.json"),
-        ("B", Topology::Shear) => include_str!("../assets/tissue_B_shear.json"),
-        ("A", Topology::Axis) => include_str!("../assets/tissue_A_axis.json"),
-        ("B", Topology::Axis) => include_str!("../assets/tissue_B_axis.json"),
-        ("A", Topology::Hex) => include_str!("../assets/tissue_A_hex.json"),
-        ("B", Topology::Hex) => include_str!("../assets/tissue_B_hex.json"),
-        (other, _) => anyhow::bail!("no calibrated tissue is shipped for object {other:?}; calibrate one"),
-    };
-    #[derive(serde::Deserialize)]
-    struct Shipped {
-        params: MsmParams,
-    }
-    let shipped: Shipped = serde_json::from_str(text).context("assets: invalid tissue file")?;
-    Ok(shipped.params)
 }
 
 /// A case in static equilibrium, ready to draw.
@@ -98,8 +72,7 @@ impl StaticScene {
         let material = Material::preset(&object)
             .with_context(|| format!("case {id}: unknown object {object:?} (the presets are A and B)"))?;
         let params = tissue_params(&material, topology)?;
-        let problem = Problem::new(material, grid, topology)?;
-        let model = problem.model(&params)?;
+        let model = MsmModel::new(grid, params, material.density)?;
         let u = crate::msm::statics::equilibrium(&model, &case)?;
         let largest = u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()).fold(0.0, f64::max);
         let side = crate::grid::CUBE_SIDE_M;
@@ -122,8 +95,7 @@ impl StaticScene {
                 Some(u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() as f32).collect())
             }
             ColourMode::Error => {
-                let fem =
-                    crate::fem::FemModel::new(grid, &problem.material).solve_cases(std::slice::from_ref(&case))?;
+                let fem = crate::fem::FemModel::new(grid, &material).solve_cases(std::slice::from_ref(&case))?;
                 Some(
                     u.iter()
                         .zip(&fem[0].displacements)

@@ -32,8 +32,8 @@ use crate::cases::{LoadCase, parse_case_id};
 use crate::grid::Grid;
 use crate::material::Material;
 use crate::msm::Topology;
-use crate::scene::tissue_params;
 use crate::sim::{Integrator, MsmTissue, Simulation, Tissue as _, Tool, choose_integrator};
+use crate::tissue::tissue_params;
 
 /// A script.
 #[derive(Debug, Clone, Deserialize)]

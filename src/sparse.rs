@@ -8,7 +8,6 @@
 //! Newton and implicit solvers refactor every step.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
@@ -66,18 +65,9 @@ impl std::fmt::Debug for SpdSystem {
 
 impl SpdSystem {
     /// Builds the pattern from `(row, col)` entries (either triangle; each is mapped to the lower
-    /// one) and returns the system with, for each entry, the slot its value goes to.
+    /// one) and returns the system with, for each entry, the slot its value goes to. The
+    /// elimination order is faer's approximate minimum degree.
     pub fn new(n: usize, entries: &[(usize, usize)]) -> Result<(Self, Vec<u32>), SparseError> {
-        Self::with_ordering(n, entries, None)
-    }
-
-    /// As [`SpdSystem::new`], with a fill-reducing elimination order (`order[k]` = the unknown
-    /// eliminated k-th) instead of faer's approximate minimum degree.
-    pub fn with_ordering(
-        n: usize,
-        entries: &[(usize, usize)],
-        order: Option<&[usize]>,
-    ) -> Result<(Self, Vec<u32>), SparseError> {
         // Lower-triangle (row, col) of every entry, then every diagonal (so a shift always fits).
         let mut lower = Vec::with_capacity(entries.len() + n);
         for &(r, c) in entries {
@@ -121,25 +111,9 @@ impl SpdSystem {
         let pattern = SymbolicSparseColMat::<u32>::new_checked(n, n, col_ptr, None, row_idx);
         slot_of.truncate(entries.len());
         let slots = slot_of;
-        let perm = match order {
-            Some(order) => {
-                let mut inv = vec![u32::MAX; n];
-                for (k, &old) in order.iter().enumerate() {
-                    if old >= n || inv[old] != u32::MAX || order.len() != n {
-                        return Err(SparseError::Pattern("ordering is not a permutation".into()));
-                    }
-                    inv[old] = k as u32;
-                }
-                Some((order.iter().map(|&o| o as u32).collect::<Vec<u32>>(), inv))
-            }
-            None => None,
-        };
-        let ordering = match &perm {
-            Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, n)),
-            None => SymmetricOrdering::Amd,
-        };
-        let symbolic = factorize_symbolic_cholesky(pattern.as_ref(), Side::Lower, ordering, Default::default())
-            .map_err(|e| SparseError::Pattern(format!("{e:?}")))?;
+        let symbolic =
+            factorize_symbolic_cholesky(pattern.as_ref(), Side::Lower, SymmetricOrdering::Amd, Default::default())
+                .map_err(|e| SparseError::Pattern(format!("{e:?}")))?;
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
@@ -157,16 +131,6 @@ impl SpdSystem {
     /// Dimension.
     pub fn n(&self) -> usize {
         self.n
-    }
-
-    /// Number of stored entries (lower triangle).
-    pub fn nnz(&self) -> usize {
-        self.values.len()
-    }
-
-    /// Number of entries of the Cholesky factor.
-    pub fn nnz_factor(&self) -> usize {
-        self.l_values.len()
     }
 
     /// Approximate bytes held: matrix pattern and values, factor values (the symbolic

@@ -21,7 +21,7 @@ use crate::grid::Grid;
 use crate::material::Material;
 use crate::msm::{MsmParams, Topology};
 use crate::sim::{Integrator, MsmTissue, Tissue, Tool};
-use crate::scene::tissue_params;
+use crate::tissue::tissue_params;
 
 /// What the user asked for.
 #[derive(Debug, Clone, PartialEq)]

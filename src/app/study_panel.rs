@@ -3,7 +3,7 @@
 
 use egui_plot::{Corner, Legend, MarkerShape, Plot, PlotPoints, Points};
 
-use crate::study::chart::{ChartOptions, ChartPoint, ModelKind, compute};
+use crate::study::chart::{ChartIntegrator, ChartOptions, ChartPoint, ModelKind, compute};
 use super::worker::{Slot, State};
 use crate::study::choose::{Choice, Metric, choose};
 
@@ -156,10 +156,12 @@ fn speed_accuracy_plot(ui: &mut egui::Ui, mine: &[&ChartPoint]) {
         .show(ui, |plot| {
             for (i, kind) in ModelKind::ALL.iter().enumerate() {
                 let name = kind.name();
-                for (integrator, shape) in [("explicit", MarkerShape::Circle), ("implicit", MarkerShape::Up)] {
+                for (integrator, shape) in
+                [(ChartIntegrator::Explicit, MarkerShape::Circle), (ChartIntegrator::Implicit, MarkerShape::Up)]
+            {
                     let pts: Vec<[f64; 2]> = mine
                         .iter()
-                        .filter(|p| p.model == name && p.integrator == integrator)
+                        .filter(|p| p.model == *kind && p.integrator == integrator)
                         .map(|p| [p.step_s.log10(), p.avg_err_pct.log10()])
                         .collect();
                     plot.points(

@@ -10,8 +10,8 @@
 //! warm-started from the previous force of the same axis, with the sparse pattern and symbolic
 //! factorisation kept in a per-thread [`Workspace`].
 
-use crate::cases::{Bc, LoadCase, benchmark_cases};
-use crate::fem::{CaseSolution, FemModel};
+use crate::cases::{Bc, CaseSolution, LoadCase, benchmark_cases};
+use crate::fem::FemModel;
 use crate::grid::Grid;
 use crate::material::Material;
 use crate::msm::forces::TangentAssembler;

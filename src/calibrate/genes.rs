@@ -89,11 +89,6 @@ impl GeneSpace {
         self.names.is_empty()
     }
 
-    /// Index of the damping gene (always last).
-    pub fn d_index(&self) -> usize {
-        self.names.len() - 1
-    }
-
     /// Overrides the bounds of a gene by name; checks `0 <= lo < hi`, finite.
     pub fn set_bound(&mut self, name: &str, lo: f64, hi: f64) -> Result<(), String> {
         let i = self

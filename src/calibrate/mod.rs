@@ -27,7 +27,7 @@ pub use genes::GeneSpace;
 use crate::msm::{MsmParams, Topology};
 
 /// The search method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// GA with Metropolis screening of crossover (XSA) and mutation (MSA): the paper's method.
@@ -39,7 +39,7 @@ pub enum Method {
 }
 
 /// What the cost compares.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum CostMode {
     /// Static equilibria (the paper's cost; `d` is not identified).
@@ -203,8 +203,8 @@ pub fn calibrate(
     settings.validate().map_err(CalibrationError::Settings)?;
     let start = Instant::now();
     let outcome = match settings.method {
-        Method::Hybrid | Method::Ga => search::genetic(problem, space, settings, cancel, on_generation)?,
-        Method::Sa => search::annealing(problem, space, settings, cancel, on_generation)?,
+        Method::Hybrid | Method::Ga => search::genetic(problem, space, settings, cancel, on_generation),
+        Method::Sa => search::annealing(problem, space, settings, cancel, on_generation),
     };
     let mut params = space.params(&outcome.best);
     let (d_crit, omega) = damping::critical_damping(&problem.model(&params).map_err(CostError::from)?)?;

@@ -25,7 +25,7 @@ use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt as _, SeedableRng as _};
 use rayon::prelude::*;
 
-use super::cost::{CostError, Problem, Workspace};
+use super::cost::{Problem, Workspace};
 use super::genes::GeneSpace;
 use super::{CostMode, GenerationStats, Method, Settings};
 
@@ -54,13 +54,13 @@ struct Evaluator<'a> {
 impl Evaluator<'_> {
     /// Costs of many chromosomes in parallel. A chromosome whose model cannot be solved (a static
     /// solve that does not converge, say) gets an infinite cost: the search moves on without it.
-    fn eval_many(&mut self, genes: &[Vec<f64>]) -> Result<Vec<f64>, CostError> {
+    fn eval_many(&mut self, genes: &[Vec<f64>]) -> Vec<f64> {
         self.evaluations += genes.len() as u64;
         let (problem, space, mode) = (self.problem, self.space, self.mode);
-        Ok(genes
+        genes
             .par_iter()
             .map_init(Workspace::default, |ws, g| problem.cost_in(mode, &space.params(g), ws).unwrap_or(f64::INFINITY))
-            .collect())
+            .collect()
     }
 }
 
@@ -123,13 +123,13 @@ pub fn genetic(
     settings: &Settings,
     cancel: &AtomicBool,
     on_generation: &mut dyn FnMut(&GenerationStats),
-) -> Result<SearchOutcome, CostError> {
+) -> SearchOutcome {
     let screen = settings.method == Method::Hybrid;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
     let mut eval = Evaluator { problem, space, mode: settings.cost, evaluations: 0 };
     let np = settings.population.max(2);
     let mut pop: Vec<Vec<f64>> = (0..np).map(|_| random_genes(&mut rng, space)).collect();
-    let mut cost = eval.eval_many(&pop)?;
+    let mut cost = eval.eval_many(&pop);
     let (mut best, mut best_cost) = best_of(&pop, &cost);
     let mut t = initial_temperature(&cost);
     let beta = lundy_mees_beta(t, settings.t_final_ratio, settings.generations);
@@ -175,7 +175,7 @@ pub fn genetic(
             }
         }
         let fresh: Vec<usize> = (0..children.len()).filter(|&c| crossed[c / 2]).collect();
-        let fresh_cost = eval.eval_many(&fresh.iter().map(|&c| children[c].clone()).collect::<Vec<_>>())?;
+        let fresh_cost = eval.eval_many(&fresh.iter().map(|&c| children[c].clone()).collect::<Vec<_>>());
         let mut child_cost: Vec<f64> = parents.iter().map(|&p| cost[p]).collect();
         for (&c, &f) in fresh.iter().zip(&fresh_cost) {
             child_cost[c] = f;
@@ -209,7 +209,7 @@ pub fn genetic(
                 mutants.push(m);
             }
         }
-        let mutant_cost = eval.eval_many(&mutants)?;
+        let mutant_cost = eval.eval_many(&mutants);
         for ((c, m), mc) in mutated.into_iter().zip(mutants).zip(mutant_cost) {
             let accept = !screen || metropolis(&mut rng, mc - child_cost[c], t);
             if accept {
@@ -225,7 +225,7 @@ pub fn genetic(
         }
         t /= 1.0 + beta * t;
     }
-    Ok(SearchOutcome { best, best_cost, history, evaluations: eval.evaluations, cancelled })
+    SearchOutcome { best, best_cost, history, evaluations: eval.evaluations, cancelled }
 }
 
 /// Runs the pure simulated annealing baseline.
@@ -235,15 +235,15 @@ pub fn annealing(
     settings: &Settings,
     cancel: &AtomicBool,
     on_generation: &mut dyn FnMut(&GenerationStats),
-) -> Result<SearchOutcome, CostError> {
+) -> SearchOutcome {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
     let mut eval = Evaluator { problem, space, mode: settings.cost, evaluations: 0 };
     let mut x = random_genes(&mut rng, space);
-    let mut fx = eval.eval_many(std::slice::from_ref(&x))?[0];
+    let mut fx = eval.eval_many(std::slice::from_ref(&x))[0];
     let (mut best, mut best_cost) = (x.clone(), fx);
     // T0 from a sample of moves around the start, as the GA takes it from its population.
     let probe: Vec<Vec<f64>> = (0..settings.sa_iterations.max(2)).map(|_| random_genes(&mut rng, space)).collect();
-    let probe_cost = eval.eval_many(&probe)?;
+    let probe_cost = eval.eval_many(&probe);
     let mut t = initial_temperature(&probe_cost);
     let beta = lundy_mees_beta(t, settings.t_final_ratio, settings.generations);
     let mut history = Vec::with_capacity(settings.generations + 1);
@@ -274,7 +274,7 @@ pub fn annealing(
                 v = 2.0 * space.hi[g] - v;
             }
             y[g] = v.clamp(space.lo[g], space.hi[g]);
-            let fy = eval.eval_many(std::slice::from_ref(&y))?[0];
+            let fy = eval.eval_many(std::slice::from_ref(&y))[0];
             if metropolis(&mut rng, fy - fx, t) {
                 (x, fx) = (y, fy);
             }
@@ -288,7 +288,7 @@ pub fn annealing(
         history.push(s);
         t /= 1.0 + beta * t;
     }
-    Ok(SearchOutcome { best, best_cost, history, evaluations: eval.evaluations, cancelled })
+    SearchOutcome { best, best_cost, history, evaluations: eval.evaluations, cancelled }
 }
 
 fn best_of(pop: &[Vec<f64>], cost: &[f64]) -> (Vec<f64>, f64) {

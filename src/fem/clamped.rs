@@ -18,9 +18,9 @@
 
 use nalgebra::Matrix6;
 
+use super::FemModel;
 use super::element::hex8_stiffness;
-use super::{CaseSolution, FemModel};
-use crate::cases::{Bc, LoadCase};
+use crate::cases::{Bc, CaseSolution, LoadCase};
 use crate::grid::Grid;
 use crate::sparse::{SparseError, SpdSystem};
 

@@ -16,7 +16,7 @@ use super::element::NODE_SIGNS;
 use crate::sparse::{SparseError, SpdSystem};
 
 /// How element forces are computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Formulation {
     /// Small-strain linear elasticity, `f = -K u`.
@@ -184,21 +184,17 @@ impl FemDynamics {
     /// linear model; for the corotational one the forces are corotational and the Jacobian is
     /// the rest stiffness. The first step (or a new `dt`) factorises; later steps allocate nothing.
     pub fn step_prefactored(&mut self, dt: f64) -> Result<(), SparseError> {
-        let rebuild = self.implicit.as_ref().is_none_or(|(_, _, key)| *key != (dt, self.alpha));
-        if rebuild {
-            let (entries, values) = self.model.stiffness_entries();
-            let (mut system, slots) = SpdSystem::new(self.x.len(), &entries)?;
-            for (slot, v) in slots.iter().zip(values) {
-                system.add(*slot, dt * dt * v);
+        let key = (dt, self.alpha);
+        // Moved out while the forces are computed, and back in (moves only: no allocation).
+        let work = match self.implicit.take() {
+            Some(work) if work.2 == key => work,
+            stale => {
+                self.implicit = stale; // kept if the new factorisation fails
+                (self.prefactored_system(dt)?, vec![0.0; self.x.len()], key)
             }
-            system.add_diagonal_scaled(1.0 + dt * self.alpha, &self.mass);
-            let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
-            system.decouple(&fixed, 1.0);
-            system.factor()?;
-            self.implicit = Some((system, vec![0.0; self.x.len()], (dt, self.alpha)));
-        }
+        };
         self.compute_forces();
-        let Some((system, rhs, _)) = self.implicit.as_mut() else { unreachable!("built above") };
+        let (system, rhs, _) = self.implicit.insert(work);
         for i in 0..rhs.len() {
             rhs[i] = (self.mass[i] * self.v[i] + dt * self.f[i]) * self.free[i];
         }
@@ -208,6 +204,20 @@ impl FemDynamics {
             self.x[i] += dt * self.v[i];
         }
         Ok(())
+    }
+
+    /// `M (1 + dt alpha) + dt^2 K` with the fixed dofs decoupled, factorised.
+    fn prefactored_system(&self, dt: f64) -> Result<SpdSystem, SparseError> {
+        let (entries, values) = self.model.stiffness_entries();
+        let (mut system, slots) = SpdSystem::new(self.x.len(), &entries)?;
+        for (slot, v) in slots.iter().zip(values) {
+            system.add(*slot, dt * dt * v);
+        }
+        system.add_diagonal_scaled(1.0 + dt * self.alpha, &self.mass);
+        let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
+        system.decouple(&fixed, 1.0);
+        system.factor()?;
+        Ok(system)
     }
 
     /// Kinetic energy, joules.

@@ -10,7 +10,7 @@ pub mod clamped;
 pub mod dynamics;
 pub mod element;
 
-use crate::cases::LoadCase;
+use crate::cases::{CaseSolution, LoadCase};
 use crate::grid::Grid;
 use crate::material::Material;
 use crate::sparse::{SparseError, SpdSystem};
@@ -29,21 +29,6 @@ pub struct FemModel {
     /// The material stiffness `C` (Voigt).
     pub material: nalgebra::Matrix6<f64>,
     elements: Vec<[usize; 8]>,
-}
-
-/// The answer of one load case.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CaseSolution {
-    /// Spec case id.
-    pub case_id: String,
-    /// Loaded axis, 1-based.
-    pub axis: usize,
-    /// Applied force, newtons.
-    pub force_n: f64,
-    /// Nodal displacements, metres, row = node.
-    pub displacements: Vec<[f64; 3]>,
-    /// Sum of the support reactions `K u - f` over the fixed degrees of freedom, newtons.
-    pub reaction_n: [f64; 3],
 }
 
 impl FemModel {

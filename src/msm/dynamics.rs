@@ -117,15 +117,19 @@ impl Dynamics {
     /// matrix is positive definite for any `dt`. The first call after [`Dynamics::apply_case`]
     /// builds the sparse pattern; later calls allocate nothing.
     pub fn step_implicit(&mut self, model: &MsmModel, dt: f64) -> Result<(), SparseError> {
-        if self.implicit.is_none() {
-            let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
-            let tangent = TangentAssembler::new(model, DofMap::free(&fixed))?;
-            let rhs = vec![0.0; tangent.system.n()];
-            let nn = self.free.len();
-            self.implicit = Some(ImplicitWork { tangent, kv: std::array::from_fn(|_| vec![0.0; nn]), rhs });
-        }
+        // Moved out while the forces are computed, and back in (moves only: no allocation).
+        let work = match self.implicit.take() {
+            Some(work) => work,
+            None => {
+                let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
+                let tangent = TangentAssembler::new(model, DofMap::free(&fixed))?;
+                let rhs = vec![0.0; tangent.system.n()];
+                let nn = self.free.len();
+                ImplicitWork { tangent, kv: std::array::from_fn(|_| vec![0.0; nn]), rhs }
+            }
+        };
         self.forces(model);
-        let Some(work) = self.implicit.as_mut() else { unreachable!("built above") };
+        let work = self.implicit.insert(work);
         let d = model.params.d;
         for kv in work.kv.iter_mut() {
             kv.fill(0.0);
@@ -160,16 +164,20 @@ impl Dynamics {
     /// and one pair of triangular solves. The factor is rebuilt when `dt`, the parameters or
     /// the fixed nodes change; a step that reuses it allocates nothing.
     pub fn step_prefactored(&mut self, model: &MsmModel, dt: f64) -> Result<(), SparseError> {
-        if self.prefactored.is_none() {
-            let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
-            let tangent = TangentAssembler::at_rest(model, DofMap::free(&fixed))?;
-            let rhs = vec![0.0; tangent.system.n()];
-            let g = model.grid;
-            let rest = std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect());
-            self.prefactored = Some(PrefactoredWork { tangent, rhs, rest, dt: f64::NAN });
-        }
+        // Moved out while the forces are computed, and back in (moves only: no allocation).
+        let work = match self.prefactored.take() {
+            Some(work) => work,
+            None => {
+                let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
+                let tangent = TangentAssembler::at_rest(model, DofMap::free(&fixed))?;
+                let rhs = vec![0.0; tangent.system.n()];
+                let g = model.grid;
+                let rest = std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect());
+                PrefactoredWork { tangent, rhs, rest, dt: f64::NAN }
+            }
+        };
         self.forces(model);
-        let Some(work) = self.prefactored.as_mut() else { unreachable!("built above") };
+        let work = self.prefactored.insert(work);
         let m = model.node_mass;
         let d = model.params.d;
         if work.dt != dt {

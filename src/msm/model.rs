@@ -18,7 +18,7 @@ pub enum ParamError {
 }
 
 /// Which springs the lattice has.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Topology {
     /// The paper's model: axis-aligned structural springs only (no shear stiffness).

@@ -19,8 +19,7 @@
 use super::forces::{ForceScratch, TangentAssembler, add_spring_forces};
 use super::model::{MsmModel, Topology};
 use super::reduction::DofMap;
-use crate::cases::{Bc, LoadCase};
-use crate::fem::CaseSolution;
+use crate::cases::{Bc, CaseSolution, LoadCase};
 use crate::sparse::SparseError;
 
 /// Errors of the static solve.

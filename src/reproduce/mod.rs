@@ -209,18 +209,19 @@ pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
             mean_series.push((format!("{method:?}"), m));
             sd_series.push((format!("{method:?}"), sd));
         }
-        let to_series = |v: &Vec<(String, Vec<(f64, f64)>)>| -> Vec<(String, Vec<(f64, f64)>)> { v.clone() };
-        let means = to_series(&mean_series);
-        let sds = to_series(&sd_series);
         let svg = line_panels(
             &format!("Fig. {fig}: object {name}, fitness per generation (mean over {} seeds)", opts.seeds),
             "generation (SA: temperature step)",
             &[
-                ("average fitness", "1/m", means.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect()),
+                (
+                    "average fitness",
+                    "1/m",
+                    mean_series.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect(),
+                ),
                 (
                     "standard deviation of fitness",
                     "1/m",
-                    sds.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect(),
+                    sd_series.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect(),
                 ),
             ],
         )?;

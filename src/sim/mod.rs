@@ -12,7 +12,7 @@ use crate::cases::LoadCase;
 use crate::msm::{MsmModel, MsmParams};
 
 /// Time integrator.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Integrator {
     /// Symplectic (semi-implicit) Euler: cheap, stable below a critical time step.

@@ -18,14 +18,14 @@
 use std::time::Instant;
 
 use crate::bench::{time_fallible, time_per_call};
-use crate::cases::LoadCase;
+use crate::cases::{CaseSolution, LoadCase};
+use crate::fem::FemModel;
 use crate::fem::clamped::ClampedSolver;
 use crate::fem::dynamics::{FemDynamics, Formulation};
-use crate::fem::{CaseSolution, FemModel};
 use crate::grid::{CUBE_SIDE_M, Grid};
 use crate::material::Material;
 use crate::msm::{Dynamics, MsmModel, MsmParams, Topology, statics};
-use crate::scene::tissue_params;
+use crate::tissue::tissue_params;
 
 /// Nodes per axis of the reference FEM.
 pub const REFERENCE_N: usize = 40;
@@ -39,7 +39,7 @@ pub const MAX_COUPLED_IMPLICIT_N: usize = 24;
 /// The length errors are expressed in (the paper's 8^3 spacing), metres.
 pub const ERROR_UNIT_M: f64 = CUBE_SIDE_M / 7.0;
 
-/// A model of the tissue.
+/// A model of the tissue; in files, its [`ModelKind::name`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ModelKind {
     /// Mass-spring lattice of a topology.
@@ -65,19 +65,74 @@ impl ModelKind {
             ModelKind::Fem(f) => format!("fem-{}", f.name()),
         }
     }
+
+    /// The model of a [`ModelKind::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
 }
 
+impl std::fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(&self.name())
+    }
+}
+
+/// Compares with a [`ModelKind::name`].
+impl serde::Serialize for ModelKind {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(&self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for ModelKind {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let name = <String as serde::Deserialize>::deserialize(deserializer)?;
+        Self::from_name(&name).ok_or_else(|| {
+            let known: Vec<String> = Self::ALL.iter().map(|k| k.name()).collect();
+            serde::de::Error::custom(format!("unknown model {name:?} (expected one of {})", known.join(", ")))
+        })
+    }
+}
+
+/// How a chart point steps in time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ChartIntegrator {
+    /// Symplectic Euler.
+    Explicit,
+    /// Prefactored backward Euler.
+    Implicit,
+}
+
+impl ChartIntegrator {
+    /// The lower-case name used in the chart and the CSV.
+    pub fn name(self) -> &'static str {
+        match self {
+            ChartIntegrator::Explicit => "explicit",
+            ChartIntegrator::Implicit => "implicit",
+        }
+    }
+}
+
+impl std::fmt::Display for ChartIntegrator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.name())
+    }
+}
+
+/// Compares with a [`ChartIntegrator::name`].
 /// One point of the chart.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ChartPoint {
     /// Object label.
     pub object: String,
-    /// Model name.
-    pub model: String,
+    /// The model (`msm-axis`, ..., `fem-corotational` in files).
+    pub model: ModelKind,
     /// Nodes per axis.
     pub n: usize,
     /// `explicit` (symplectic Euler) or `implicit` (prefactored backward Euler).
-    pub integrator: String,
+    pub integrator: ChartIntegrator,
     /// Wall time of one step, s.
     pub step_s: f64,
     /// Largest stable explicit step ([`damped_explicit_limit`] of `omega_max` and the damping rate), s;
@@ -141,12 +196,12 @@ struct PointBase<'a> {
 }
 
 impl PointBase<'_> {
-    fn point(&self, integrator: &str, step_s: f64, dt_max_s: f64, memory_bytes: usize) -> ChartPoint {
+    fn point(&self, integrator: ChartIntegrator, step_s: f64, dt_max_s: f64, memory_bytes: usize) -> ChartPoint {
         ChartPoint {
             object: self.object.into(),
-            model: self.model.name(),
+            model: self.model,
             n: self.n,
-            integrator: integrator.into(),
+            integrator,
             step_s,
             dt_max_s,
             static_s: self.static_s,
@@ -158,10 +213,10 @@ impl PointBase<'_> {
     }
 }
 
-/// The 64 common sample points: the nodes of the 4^3 lattice.
+/// The 64 common sample points: the nodes of the 4^3 lattice (as [`Grid::positions`] of a 4^3 grid).
 fn sample_points() -> Vec<[f64; 3]> {
-    let g = Grid::new(4).unwrap_or_else(|e| unreachable!("{e}"));
-    g.positions()
+    let h = CUBE_SIDE_M / 3.0;
+    (0..64).map(|p| [p % 4, (p / 4) % 4, p / 16].map(|c| c as f64 * h)).collect()
 }
 
 /// Trilinear interpolation of nodal displacements `u` on `grid` at point `p`.
@@ -277,10 +332,10 @@ fn msm_points(
         dynamics.apply_case(&cs[0]);
         dynamics.step_prefactored(&model, 1e-3)?;
         let implicit = time_fallible(opts.timing_s, || dynamics.step_prefactored(&model, 1e-3))?;
-        out.push(("implicit", implicit, f64::INFINITY, base + dynamics.prefactored_memory_bytes()));
+        out.push((ChartIntegrator::Implicit, implicit, f64::INFINITY, base + dynamics.prefactored_memory_bytes()));
     }
     let shared = PointBase { object, model: ModelKind::Msm(topology), n: grid.n(), static_s, avg, max };
-    let mut points = vec![shared.point("explicit", explicit, dt_max, base)];
+    let mut points = vec![shared.point(ChartIntegrator::Explicit, explicit, dt_max, base)];
     points.extend(out.into_iter().map(|(i, t, dt, m)| shared.point(i, t, dt, m)));
     Ok(points)
 }
@@ -320,8 +375,8 @@ fn fem_points(
         implicit = Some((t, fem.memory_bytes()));
     }
     let shared = PointBase { object, model: ModelKind::Fem(formulation), n: grid.n(), static_s, avg, max };
-    let mut points = vec![shared.point("explicit", explicit, dt_max, without)];
-    points.extend(implicit.map(|(t, m)| shared.point("implicit", t, f64::INFINITY, m)));
+    let mut points = vec![shared.point(ChartIntegrator::Explicit, explicit, dt_max, without)];
+    points.extend(implicit.map(|(t, m)| shared.point(ChartIntegrator::Implicit, t, f64::INFINITY, m)));
     Ok(points)
 }
 
@@ -451,6 +506,21 @@ mod tests {
             x += h * v;
         }
         x.is_nan() || x.abs() > 1e3 // NaN after an overflow counts as growth
+    }
+
+    #[test]
+    fn sample_points_are_the_4_cubed_nodes() {
+        assert_eq!(sample_points(), Grid::new(4).unwrap().positions());
+    }
+
+    #[test]
+    fn model_and_integrator_names_round_trip() {
+        for kind in ModelKind::ALL {
+            assert_eq!(ModelKind::from_name(&kind.name()), Some(kind));
+            assert_eq!(format!("{kind}"), kind.name());
+        }
+        assert_eq!(ModelKind::from_name("msm-other"), None);
+        assert_eq!(format!("{:<9}|", ChartIntegrator::Explicit), "explicit |");
     }
 
     #[test]

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use super::chart::ChartPoint;
 
 /// Which error the budget bounds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Metric {
     /// The worst node (the default: a budget holds everywhere).
     Max,
@@ -142,13 +142,28 @@ pub fn choose(points: &[ChartPoint], object: &str, max_error_pct: f64, rate_hz: 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fem::dynamics::Formulation;
+    use crate::msm::Topology;
+    use crate::study::chart::{ChartIntegrator, ModelKind};
 
-    fn point(model: &str, integrator: &str, step_s: f64, dt_max_s: f64, max_err_pct: f64) -> ChartPoint {
+    // Stand-ins for the four kinds of model the test needs.
+    const CHEAP_STIFF: ModelKind = ModelKind::Msm(Topology::Axis);
+    const IMPLICIT: ModelKind = ModelKind::Msm(Topology::Shear);
+    const COARSE: ModelKind = ModelKind::Msm(Topology::Hex);
+    const FINE: ModelKind = ModelKind::Fem(Formulation::Linear);
+
+    fn point(
+        model: ModelKind,
+        integrator: ChartIntegrator,
+        step_s: f64,
+        dt_max_s: f64,
+        max_err_pct: f64,
+    ) -> ChartPoint {
         ChartPoint {
             object: "A".into(),
-            model: model.into(),
+            model,
             n: 8,
-            integrator: integrator.into(),
+            integrator,
             step_s,
             dt_max_s,
             static_s: 0.0,
@@ -163,22 +178,22 @@ mod tests {
     fn picks_the_cheapest_tick_that_meets_both_budgets() {
         let points = vec![
             // 1 us per step but dt_max 0.1 ms: 12 substeps per 1 ms tick = 12 us.
-            point("cheap-stiff", "explicit", 1e-6, 1e-4, 1.0),
+            point(CHEAP_STIFF, ChartIntegrator::Explicit, 1e-6, 1e-4, 1.0),
             // 5 us per step, one step per tick.
-            point("implicit", "implicit", 5e-6, f64::INFINITY, 1.0),
+            point(IMPLICIT, ChartIntegrator::Implicit, 5e-6, f64::INFINITY, 1.0),
             // Cheapest of all but too inaccurate.
-            point("coarse", "explicit", 1e-7, 1e-2, 3.0),
+            point(COARSE, ChartIntegrator::Explicit, 1e-7, 1e-2, 3.0),
             // Accurate but too slow.
-            point("fine", "implicit", 2e-3, f64::INFINITY, 0.1),
+            point(FINE, ChartIntegrator::Implicit, 2e-3, f64::INFINITY, 0.1),
         ];
         assert_eq!(points[0].substeps(1000.0), 12.0);
         let c = choose(&points, "A", 2.0, 1000.0, Metric::Max);
-        assert_eq!(c.chosen.map(|p| p.model), Some("implicit".to_owned()), "{}", c.explanation);
+        assert_eq!(c.chosen.map(|p| p.model), Some(IMPLICIT), "{}", c.explanation);
         let c = choose(&points, "A", 0.5, 1000.0, Metric::Max);
         assert!(c.chosen.is_none());
-        assert!(c.explanation.contains("cheapest is fine"), "{}", c.explanation);
+        assert!(c.explanation.contains(&format!("cheapest is {FINE}")), "{}", c.explanation);
         // At 10 Hz the fine model fits its tick.
         let c = choose(&points, "A", 0.5, 10.0, Metric::Max);
-        assert_eq!(c.chosen.map(|p| p.model), Some("fine".to_owned()));
+        assert_eq!(c.chosen.map(|p| p.model), Some(FINE));
     }
 }

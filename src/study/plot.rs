@@ -3,7 +3,7 @@
 
 use plotters::prelude::*;
 
-use super::chart::ChartPoint;
+use super::chart::{ChartIntegrator, ChartPoint, ModelKind};
 use super::stability::StabilityPoint;
 
 const COLOURS: [RGBColor; 5] = [
@@ -31,7 +31,7 @@ fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
 
 /// Average error (log) against time per step (log), one panel per object: colour = model,
 /// circle = explicit, triangle = implicit, label = resolution, the Pareto front joined.
-pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[String]) -> anyhow::Result<String> {
+pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[ModelKind]) -> anyhow::Result<String> {
     let mut objects: Vec<&str> = points.iter().map(|p| p.object.as_str()).collect();
     objects.dedup();
     let mut svg = String::new();
@@ -73,23 +73,24 @@ pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[String]) -> anyhow::R
                 .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(1)));
             for (i, model) in models.iter().enumerate() {
                 let colour = COLOURS[i % COLOURS.len()];
-                let of_model: Vec<&&ChartPoint> = mine.iter().filter(|p| &p.model == model).collect();
+                let of_model: Vec<&&ChartPoint> = mine.iter().filter(|p| p.model == *model).collect();
                 chart
                     .draw_series(of_model.iter().map(|p| {
                         let at = (p.step_s, p.avg_err_pct);
                         let style = if p.pareto { colour.filled() } else { colour.stroke_width(2) };
-                        let marker: DynElement<'_, SVGBackend<'_>, (f64, f64)> = if p.integrator == "explicit" {
-                            Circle::new(at, 5, style).into_dyn()
-                        } else {
-                            TriangleMarker::new(at, 6, style).into_dyn()
-                        };
+                        let marker: DynElement<'_, SVGBackend<'_>, (f64, f64)> =
+                            if p.integrator == ChartIntegrator::Explicit {
+                                Circle::new(at, 5, style).into_dyn()
+                            } else {
+                                TriangleMarker::new(at, 6, style).into_dyn()
+                            };
                         marker
                     }))
                     .map_err(err)?
-                    .label(model.as_str())
+                    .label(model.name())
                     .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
                 chart
-                    .draw_series(of_model.iter().filter(|p| p.integrator == "explicit").map(|p| {
+                    .draw_series(of_model.iter().filter(|p| p.integrator == ChartIntegrator::Explicit).map(|p| {
                         Text::new(format!("{}", p.n), (p.step_s, p.avg_err_pct), ("sans-serif", 11).into_font())
                     }))
                     .map_err(err)?;

@@ -141,7 +141,7 @@ fn shipped_hex_lattice_meets_the_richer_model_targets_at_10_newtons() {
     // axis lattice at the exact optimum of the same cost (the best it can do).
     for m in [Material::object_a(), Material::object_b()] {
         let name = m.name.clone();
-        let hex = tissue_sim::scene::tissue_params(&m, Topology::Hex).expect("shipped hex tissue");
+        let hex = tissue_sim::tissue::tissue_params(&m, Topology::Hex).expect("shipped hex tissue");
         assert_eq!(hex.topology(), Topology::Hex);
         let (axis_problem, _) = problem(m.clone());
         let (k, _) = axis_problem.axis_optimum();

@@ -1,7 +1,7 @@
 //! The FEM reference against exact answers and its own invariants.
 
-use tissue_sim::cases::{Bc, LoadCase, benchmark_cases};
-use tissue_sim::fem::{CaseSolution, FemModel, StaticSolver};
+use tissue_sim::cases::{Bc, CaseSolution, LoadCase, benchmark_cases};
+use tissue_sim::fem::{FemModel, StaticSolver};
 use tissue_sim::grid::Grid;
 use tissue_sim::material::Material;
 

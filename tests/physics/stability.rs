@@ -8,9 +8,9 @@ use tissue_sim::fem::dynamics::{FemDynamics, Formulation};
 use tissue_sim::grid::Grid;
 use tissue_sim::material::Material;
 use tissue_sim::msm::{Dynamics, MsmModel, Topology};
-use tissue_sim::scene::tissue_params;
 use tissue_sim::sim::{Integrator, Simulation};
 use tissue_sim::study::stability::{fem_point, msm_point, scaled_undamped};
+use tissue_sim::tissue::tissue_params;
 
 fn hex_model(grid: Grid, stiffness: f64) -> MsmModel {
     let m = Material::object_a();
