@@ -400,64 +400,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             outcome.check_finite()?;
             crate::io::write_json_compact(&out, &outcome)
         }
-        Some(Command::Fem { object, bc, grid, out }) => {
-            let material = object.material(None)?;
-            let grid = grid.grid()?;
-            check_solver_size("fem", bc, grid.n())?;
-            let cases = benchmark_cases(&grid, &material.name, bc);
-            let bar = progress_bar(cases.len() as u64, "cases");
-            let sols = FemModel::new(grid, &material)
-                .solve_cases_with_progress(&cases, &mut |i, id| {
-                    bar.set_position(i as u64);
-                    bar.set_message(id.to_owned());
-                })
-                .with_context(|| {
-                    format!(
-                        "solving the FEM stiffness system of material {} at {n}^3 ({} cases)",
-                        material.name,
-                        bc.name(),
-                        n = grid.n()
-                    )
-                })?;
-            bar.finish_and_clear();
-            let file = DisplacementFile {
-                object: material.name.clone(),
-                bc: bc.name().into(),
-                model: "fem".into(),
-                nodes_per_axis: grid.n(),
-                cases: sols.iter().map(CaseRecord::from_solution).collect(),
-                params: None,
-            };
-            file.check_finite()?;
-            write_json_atomic(&out, &file)
-        }
-        Some(Command::Msm { object, params, grid, out }) => {
-            let material = object.material(None)?;
-            let params = params.resolve(&material)?;
-            let grid = grid.grid()?;
-            if params.topology() != Topology::Axis {
-                check_solver_size("msm", Bc::Clamped, grid.n())?;
-            }
-            let model = MsmModel::new(grid, params, material.density)?;
-            let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
-            let bar = progress_bar(cases.len() as u64, "cases");
-            let sols = statics::solve_cases_with_progress(&model, &cases, &mut |i, id| {
-                bar.set_position(i as u64);
-                bar.set_message(id.to_owned());
-            })
-            .with_context(|| msm_context(&material, &params, grid.n()))?;
-            bar.finish_and_clear();
-            let file = DisplacementFile {
-                object: material.name.clone(),
-                bc: Bc::Clamped.name().into(),
-                model: "msm".into(),
-                nodes_per_axis: grid.n(),
-                cases: sols.iter().map(CaseRecord::from_solution).collect(),
-                params: Some(params),
-            };
-            file.check_finite()?;
-            write_json_atomic(&out, &file)
-        }
+        Some(Command::Fem { object, bc, grid, out }) => fem_command(object, bc, grid, out),
+        Some(Command::Msm { object, params, grid, out }) => msm_command(object, params, grid, out),
         Some(Command::Errors { object, params, params_file, grid, json }) => {
             let (material, params) = match params_file {
                 Some(path) => {
@@ -490,42 +434,20 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             bounds,
             grid,
             out,
-        }) => {
-            let material = object.material(None)?;
-            let grid = grid.grid()?;
-            let settings =
-                Settings { method, seed, population, generations, mutation, crossover, cost, ..Settings::default() };
-            settings.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
-            let mut space = GeneSpace::new(&material, &grid, model);
-            for b in &bounds {
-                let (name, range) = b.split_once('=').with_context(|| format!("--bound {b:?}: expected GENE=LO:HI"))?;
-                let (lo, hi) = range.split_once(':').with_context(|| format!("--bound {b:?}: expected GENE=LO:HI"))?;
-                let lo: f64 = lo.trim().parse().with_context(|| format!("--bound {b:?}: bad lower bound"))?;
-                let hi: f64 = hi.trim().parse().with_context(|| format!("--bound {b:?}: bad upper bound"))?;
-                space.set_bound(name.trim(), lo, hi).map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
-            }
-            if model != Topology::Axis {
-                check_solver_size("msm", Bc::Clamped, grid.n())?;
-            }
-            let name = material.name.clone();
-            let problem = Problem::new(material, grid, model)
-                .with_context(|| format!("the FEM reference of material {name} at {}^3", grid.n()))?;
-            let bar = progress_bar(generations as u64, "generations");
-            let cancel = std::sync::atomic::AtomicBool::new(false);
-            let result = calibrate(&problem, &space, &settings, &cancel, &mut |s| {
-                bar.set_position(s.generation as u64);
-                bar.set_message(format!("best cost {:.6e} m", s.best_cost));
-            })
-            .with_context(|| format!("calibrating the {model:?} MSM of material {name}"))?;
-            bar.finish_and_clear();
-            if !result.cost.is_finite() {
-                bail!(
-                    "calibration of material {name} found no parameter set with a finite cost inside the bounds \
-                     (every evaluation failed); widen or move the --bound ranges"
-                );
-            }
-            write_json_atomic(&out, &result)
-        }
+        }) => calibrate_command(
+            object,
+            method,
+            seed,
+            population,
+            generations,
+            mutation,
+            crossover,
+            cost,
+            model,
+            bounds,
+            grid,
+            out,
+        ),
         Some(Command::Reproduce { out, seeds, no_shear }) => {
             crate::reproduce::run(&out, &crate::reproduce::Options { seeds, shear: !no_shear })?;
             println!("wrote {}", out.join("report.md").display());
@@ -551,29 +473,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             Ok(())
         }
         Some(Command::Choose { max_error, rate, object, metric, chart }) => {
-            if !(max_error.is_finite() && max_error > 0.0) {
-                bail!("--max-error must be a positive percentage, got {max_error}");
-            }
-            if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
-                bail!("--rate must be a positive rate in Hz (at most 1e7), got {rate}");
-            }
-            let object = object.to_ascii_uppercase();
-            let points = match chart {
-                Some(path) => crate::study::read_chart_csv(&path)?,
-                None => {
-                    let opts = chart_options(vec![object.clone()], vec![4, 8, 16, 32])?;
-                    crate::study::chart::compute(&opts, &mut |m| eprintln!("{m}"))?.0
-                }
-            };
-            if !points.iter().any(|p| p.object == object) {
-                bail!("the chart has no points for object {object}");
-            }
-            let choice = crate::study::choose::choose(&points, &object, max_error, rate, metric);
-            println!("{}", choice.explanation);
-            if choice.chosen.is_none() {
-                bail!("no model meets the budget");
-            }
-            Ok(())
+            choose_command(max_error, rate, object, metric, chart)
         }
         Some(Command::Bench { json }) => {
             let report = crate::bench::run()?;
@@ -587,6 +487,148 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
+fn fem_command(object: ObjectArgs, bc: Bc, grid: GridArgs, out: PathBuf) -> anyhow::Result<()> {
+    let material = object.material(None)?;
+    let grid = grid.grid()?;
+    check_solver_size("fem", bc, grid.n())?;
+    let cases = benchmark_cases(&grid, &material.name, bc);
+    let bar = progress_bar(cases.len() as u64, "cases");
+    let sols = FemModel::new(grid, &material)
+        .solve_cases_with_progress(&cases, &mut |i, id| {
+            bar.set_position(i as u64);
+            bar.set_message(id.to_owned());
+        })
+        .with_context(|| {
+            format!(
+                "solving the FEM stiffness system of material {} at {n}^3 ({} cases)",
+                material.name,
+                bc.name(),
+                n = grid.n()
+            )
+        })?;
+    bar.finish_and_clear();
+    let file = DisplacementFile {
+        object: material.name.clone(),
+        bc: bc.name().into(),
+        model: "fem".into(),
+        nodes_per_axis: grid.n(),
+        cases: sols.iter().map(CaseRecord::from_solution).collect(),
+        params: None,
+    };
+    file.check_finite()?;
+    write_json_atomic(&out, &file)
+}
+
+fn msm_command(object: ObjectArgs, params: ParamArgs, grid: GridArgs, out: PathBuf) -> anyhow::Result<()> {
+    let material = object.material(None)?;
+    let params = params.resolve(&material)?;
+    let grid = grid.grid()?;
+    if params.topology() != Topology::Axis {
+        check_solver_size("msm", Bc::Clamped, grid.n())?;
+    }
+    let model = MsmModel::new(grid, params, material.density)?;
+    let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
+    let bar = progress_bar(cases.len() as u64, "cases");
+    let sols = statics::solve_cases_with_progress(&model, &cases, &mut |i, id| {
+        bar.set_position(i as u64);
+        bar.set_message(id.to_owned());
+    })
+    .with_context(|| msm_context(&material, &params, grid.n()))?;
+    bar.finish_and_clear();
+    let file = DisplacementFile {
+        object: material.name.clone(),
+        bc: Bc::Clamped.name().into(),
+        model: "msm".into(),
+        nodes_per_axis: grid.n(),
+        cases: sols.iter().map(CaseRecord::from_solution).collect(),
+        params: Some(params),
+    };
+    file.check_finite()?;
+    write_json_atomic(&out, &file)
+}
+
+fn choose_command(
+    max_error: f64,
+    rate: f64,
+    object: String,
+    metric: crate::study::choose::Metric,
+    chart: Option<PathBuf>,
+) -> anyhow::Result<()> {
+    if !(max_error.is_finite() && max_error > 0.0) {
+        bail!("--max-error must be a positive percentage, got {max_error}");
+    }
+    if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
+        bail!("--rate must be a positive rate in Hz (at most 1e7), got {rate}");
+    }
+    let object = object.to_ascii_uppercase();
+    let points = match chart {
+        Some(path) => crate::study::read_chart_csv(&path)?,
+        None => {
+            let opts = chart_options(vec![object.clone()], vec![4, 8, 16, 32])?;
+            crate::study::chart::compute(&opts, &mut |m| eprintln!("{m}"))?.0
+        }
+    };
+    if !points.iter().any(|p| p.object == object) {
+        bail!("the chart has no points for object {object}");
+    }
+    let choice = crate::study::choose::choose(&points, &object, max_error, rate, metric);
+    println!("{}", choice.explanation);
+    if choice.chosen.is_none() {
+        bail!("no model meets the budget");
+    }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments, reason = "the calibrate command's flags, one argument each")]
+fn calibrate_command(
+    object: ObjectArgs,
+    method: Method,
+    seed: u64,
+    population: usize,
+    generations: usize,
+    mutation: f64,
+    crossover: f64,
+    cost: CostMode,
+    model: Topology,
+    bounds: Vec<String>,
+    grid: GridArgs,
+    out: PathBuf,
+) -> anyhow::Result<()> {
+    let material = object.material(None)?;
+    let grid = grid.grid()?;
+    let settings = Settings { method, seed, population, generations, mutation, crossover, cost, ..Settings::default() };
+    settings.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut space = GeneSpace::new(&material, &grid, model);
+    for b in &bounds {
+        let (name, range) = b.split_once('=').with_context(|| format!("--bound {b:?}: expected GENE=LO:HI"))?;
+        let (lo, hi) = range.split_once(':').with_context(|| format!("--bound {b:?}: expected GENE=LO:HI"))?;
+        let lo: f64 = lo.trim().parse().with_context(|| format!("--bound {b:?}: bad lower bound"))?;
+        let hi: f64 = hi.trim().parse().with_context(|| format!("--bound {b:?}: bad upper bound"))?;
+        space.set_bound(name.trim(), lo, hi).map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
+    }
+    if model != Topology::Axis {
+        check_solver_size("msm", Bc::Clamped, grid.n())?;
+    }
+    let name = material.name.clone();
+    let problem = Problem::new(material, grid, model)
+        .with_context(|| format!("the FEM reference of material {name} at {}^3", grid.n()))?;
+    let bar = progress_bar(generations as u64, "generations");
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let result = calibrate(&problem, &space, &settings, &cancel, &mut |s| {
+        bar.set_position(s.generation as u64);
+        bar.set_message(format!("best cost {:.6e} m", s.best_cost));
+    })
+    .with_context(|| format!("calibrating the {model:?} MSM of material {name}"))?;
+    bar.finish_and_clear();
+    if !result.cost.is_finite() {
+        bail!(
+            "calibration of material {name} found no parameter set with a finite cost inside the bounds \
+             (every evaluation failed); widen or move the --bound ranges"
+        );
+    }
+    write_json_atomic(&out, &result)
+}
+
 /// A progress bar on a terminal (hidden otherwise) counting `len` `unit`.
 fn progress_bar(len: u64, unit: &str) -> indicatif::ProgressBar {
     if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
@@ -594,8 +636,10 @@ fn progress_bar(len: u64, unit: &str) -> indicatif::ProgressBar {
     }
     let bar = indicatif::ProgressBar::new(len);
     bar.set_style(
-        indicatif::ProgressStyle::with_template(&format!("{{spinner}} {{bar:40}} {{pos}}/{{len}} {unit}, {{msg}} [{{elapsed}}]"))
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        indicatif::ProgressStyle::with_template(&format!(
+            "{{spinner}} {{bar:40}} {{pos}}/{{len}} {unit}, {{msg}} [{{elapsed}}]"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     bar

@@ -12,7 +12,7 @@
 //!   tissue model), [`calibrate`] (GA+SA), [`accuracy`] (cost and error tables), [`io`] (JSON and
 //!   safe output files).
 //! - Studies: [`study`] (speed against accuracy, stability, choice), [`reproduce`] (the paper's
-//!   tables and figures), [`bench`] (timings), [`script`] (`simulate`).
+//!   tables and figures), [`bench`](mod@bench) (timings), [`script`] (`simulate`).
 //! - Presentation: [`render`] (wgpu renderer, offscreen), [`scene`] (what is drawn).
 //! - [`app`]: the interactive viewer. [`cli`]: the command line.
 

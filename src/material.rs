@@ -310,7 +310,8 @@ impl Material {
             serde_json::from_str(&text)
                 .map_err(|e| MaterialError::Parse { path: shown.clone(), message: e.to_string() })?
         } else {
-            toml::from_str(&text).map_err(|e| MaterialError::Parse { path: shown.clone(), message: toml_message(&text, &e) })?
+            toml::from_str(&text)
+                .map_err(|e| MaterialError::Parse { path: shown.clone(), message: toml_message(&text, &e) })?
         };
         let default_name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("custom");
         file.into_material(default_name).map_err(|e| match e {

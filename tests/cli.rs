@@ -307,7 +307,10 @@ fn bad_input_gets_one_clear_line_and_exit_code_1() {
         (vec!["fem", "--material", &broken_s, "--out", o], "line 2"),
         (vec!["fem", "--material", &missing_s, "--out", o], "No such file"),
         (vec!["fem", "--object", "A", "--nodes", "40", "--bc", "patch", "--out", o], "at most"),
-        (vec!["msm", "--object", "A", "--nodes", "41", "--k1", "1", "--k2", "1", "--k3", "1", "--out", o], "at most 40"),
+        (
+            vec!["msm", "--object", "A", "--nodes", "41", "--k1", "1", "--k2", "1", "--k3", "1", "--out", o],
+            "at most 40",
+        ),
         (vec!["errors", "--params", &pb], "k3 must equal k2"),
         (vec!["errors", "--params", &px], "k4"),
         (vec!["render", "--case", "A_clamped_ax1_F10", "--magnify", "1e30", "--out", o], "magnify"),

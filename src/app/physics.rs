@@ -121,22 +121,27 @@ impl PhysicsThread {
         let (tx, rx) = channel();
         let shared = Arc::new(Mutex::new(Published::default()));
         let out = Arc::clone(&shared);
-        let worker = Worker::spawn("physics", || {}, move |ctx| {
-            let sim = match (first.recipe)() {
-                Ok(tissue) => {
-                    let mut sim = Simulation::with_tissue(tissue, Integrator::Prefactored, first.dt, Some(&first.case));
-                    let note = sim.set_integrator(first.integrator, first.dt);
-                    (sim, note)
-                }
-                Err(e) => {
-                    if let Ok(mut p) = out.lock() {
-                        p.note = Some(format!("cannot build the model: {e}"));
+        let worker = Worker::spawn(
+            "physics",
+            || {},
+            move |ctx| {
+                let sim = match (first.recipe)() {
+                    Ok(tissue) => {
+                        let mut sim =
+                            Simulation::with_tissue(tissue, Integrator::Prefactored, first.dt, Some(&first.case));
+                        let note = sim.set_integrator(first.integrator, first.dt);
+                        (sim, note)
                     }
-                    return;
-                }
-            };
-            run(sim, &rx, &out, ctx);
-        })?;
+                    Err(e) => {
+                        if let Ok(mut p) = out.lock() {
+                            p.note = Some(format!("cannot build the model: {e}"));
+                        }
+                        return;
+                    }
+                };
+                run(sim, &rx, &out, ctx);
+            },
+        )?;
         Ok(Self { tx, shared, worker })
     }
 
@@ -247,7 +252,12 @@ fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop,
     }
 }
 
-fn run((mut sim, note): (Simulation, Option<String>), rx: &Receiver<Command>, out: &Mutex<Published>, ctx: &Context<()>) {
+fn run(
+    (mut sim, note): (Simulation, Option<String>),
+    rx: &Receiver<Command>,
+    out: &Mutex<Published>,
+    ctx: &Context<()>,
+) {
     let start = Instant::now();
     let mut next = start;
     let mut state = Loop { message: None, note, tools: 0, paused: false, owed: 0.0 };
@@ -270,7 +280,10 @@ fn run((mut sim, note): (Simulation, Option<String>), rx: &Receiver<Command>, ou
         while !state.paused && state.owed >= sim.dt * 0.999 {
             if let Err(b) = sim.step() {
                 state.message = Some(if b.fatal {
-                    format!("t = {:.3} s: {} Paused: change a setting, use a tool or Reset to go on.", b.time_s, b.message)
+                    format!(
+                        "t = {:.3} s: {} Paused: change a setting, use a tool or Reset to go on.",
+                        b.time_s, b.message
+                    )
                 } else {
                     format!("t = {:.3} s: {}", b.time_s, b.message)
                 });

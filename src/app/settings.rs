@@ -74,7 +74,7 @@ impl Default for ViewSettings {
     }
 }
 
-/// The model-side state the panel shows (changed only through [`ViewerState::handle`]).
+/// The model-side state the panel shows (changed only through [`super::state::ViewerState::handle`]).
 #[derive(Debug, Clone)]
 pub struct Shown {
     /// The material.
@@ -109,4 +109,3 @@ impl Shown {
         self.params.topology()
     }
 }
-

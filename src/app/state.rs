@@ -12,8 +12,8 @@ use std::sync::Arc;
 
 use super::calibration::{self, Progress};
 use super::physics::{Command, Replacement};
-use super::worker::{Slot, State};
 pub use super::settings::{Shown, ToolKind, ViewSettings};
+use super::worker::{Slot, State};
 use crate::calibrate::Settings;
 use crate::cases::LoadCase;
 use crate::fem::FemModel;
@@ -75,7 +75,9 @@ pub fn bottom_clamp(grid: &Grid) -> LoadCase {
 
 /// The recipe of a mass-spring tissue for the physics thread.
 fn msm_recipe(params: MsmParams, density: f64) -> super::physics::TissueRecipe {
-    Box::new(move || MsmTissue::build(params, density).map(|t| Box::new(t) as Box<dyn Tissue>).map_err(|e| e.to_string()))
+    Box::new(move || {
+        MsmTissue::build(params, density).map(|t| Box::new(t) as Box<dyn Tissue>).map_err(|e| e.to_string())
+    })
 }
 
 impl ViewerState {
@@ -201,24 +203,24 @@ impl ViewerState {
     }
 
     fn apply_case(&mut self, send: &mut dyn FnMut(Command)) {
-        let case = LoadCase::clamped(
-            &self.grid,
-            &self.shown.material.name,
-            self.settings.case_axis,
-            self.settings.case_force,
-        );
+        let case =
+            LoadCase::clamped(&self.grid, &self.shown.material.name, self.settings.case_axis, self.settings.case_force);
         let material = self.shown.material.clone();
         let grid = self.grid;
         let solve = case.clone();
         let wake = Arc::clone(&self.wake);
         // The FEM answer, solved off the UI thread (a second one while one runs is refused).
-        let started = self.fem.start("FEM answer", move || wake(), move |ctx| {
-            let r = FemModel::new(grid, &material)
-                .solve_cases(std::slice::from_ref(&solve))
-                .map(|mut s| s.remove(0).displacements)
-                .map_err(|e| e.to_string());
-            ctx.send(r);
-        });
+        let started = self.fem.start(
+            "FEM answer",
+            move || wake(),
+            move |ctx| {
+                let r = FemModel::new(grid, &material)
+                    .solve_cases(std::slice::from_ref(&solve))
+                    .map(|mut s| s.remove(0).displacements)
+                    .map_err(|e| e.to_string());
+                ctx.send(r);
+            },
+        );
         if let Err(e) = started {
             self.shown.note = Some(format!("{e}"));
             return;
@@ -355,11 +357,7 @@ mod tests {
         state.handle(Request::StartCalibration, &mut send);
         assert!(state.shown.calibrating);
         state.handle(Request::StartCalibration, &mut send);
-        assert!(
-            state.shown.note.as_deref().is_some_and(|n| n.contains("already running")),
-            "{:?}",
-            state.shown.note
-        );
+        assert!(state.shown.note.as_deref().is_some_and(|n| n.contains("already running")), "{:?}", state.shown.note);
         state.handle(Request::CancelCalibration, &mut send);
         for _ in 0..5000 {
             state.poll();

@@ -3,8 +3,8 @@
 
 use egui_plot::{Corner, Legend, MarkerShape, Plot, PlotPoints, Points};
 
-use crate::study::chart::{ChartIntegrator, ChartOptions, ChartPoint, ModelKind, compute};
 use super::worker::{Slot, State};
+use crate::study::chart::{ChartIntegrator, ChartOptions, ChartPoint, ModelKind, compute};
 use crate::study::choose::{Choice, Metric, choose};
 
 const COLOURS: [egui::Color32; 5] = [
@@ -157,8 +157,8 @@ fn speed_accuracy_plot(ui: &mut egui::Ui, mine: &[&ChartPoint]) {
             for (i, kind) in ModelKind::ALL.iter().enumerate() {
                 let name = kind.name();
                 for (integrator, shape) in
-                [(ChartIntegrator::Explicit, MarkerShape::Circle), (ChartIntegrator::Implicit, MarkerShape::Up)]
-            {
+                    [(ChartIntegrator::Explicit, MarkerShape::Circle), (ChartIntegrator::Implicit, MarkerShape::Up)]
+                {
                     let pts: Vec<[f64; 2]> = mine
                         .iter()
                         .filter(|p| p.model == *kind && p.integrator == integrator)

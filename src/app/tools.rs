@@ -59,8 +59,9 @@ pub fn view_input(
 ) {
     let rect = response.rect;
     let aspect = rect.width() / rect.height().max(1.0);
-    let ndc =
-        |p: egui::Pos2| [2.0 * (p.x - rect.left()) / rect.width() - 1.0, 1.0 - 2.0 * (p.y - rect.top()) / rect.height()];
+    let ndc = |p: egui::Pos2| {
+        [2.0 * (p.x - rect.left()) / rect.width() - 1.0, 1.0 - 2.0 * (p.y - rect.top()) / rect.height()]
+    };
     if response.hovered() {
         let scroll = ctx.input(|i| i.smooth_scroll_delta.y);
         if scroll != 0.0 {
@@ -109,7 +110,8 @@ pub fn view_input(
                 // 0.1 mm of indentation per pixel dragged downwards.
                 let depth = ((pos.y - start_y) * 1e-4).max(0.0);
                 let centre = contact - r * dir + depth * dir;
-                requests.push(Request::Tool(Tool::Probe { centre: centre.as_dvec3().to_array(), radius: f64::from(r) }));
+                requests
+                    .push(Request::Tool(Tool::Probe { centre: centre.as_dvec3().to_array(), radius: f64::from(r) }));
                 let f = scene.tool_force;
                 let along = -(f[0] * f64::from(dir.x) + f[1] * f64::from(dir.y) + f[2] * f64::from(dir.z));
                 requests.push(Request::ForceSample([f64::from(depth) * 1e3, along.max(0.0)]));

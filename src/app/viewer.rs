@@ -62,7 +62,11 @@ struct App {
 }
 
 impl App {
-    fn new(proxy: EventLoopProxy<Wake>, max_frames: Option<u64>, screenshot: Option<std::path::PathBuf>) -> anyhow::Result<Self> {
+    fn new(
+        proxy: EventLoopProxy<Wake>,
+        max_frames: Option<u64>,
+        screenshot: Option<std::path::PathBuf>,
+    ) -> anyhow::Result<Self> {
         let egui = egui::Context::default();
         let wake_proxy = proxy.clone();
         egui.set_request_repaint_callback(move |_| {
@@ -133,7 +137,15 @@ impl App {
                         rest: self.overlay.rest(),
                     };
                     let s = &mut self.state;
-                    panel::show(ui, &mut s.settings, &s.shown, &pctx, &mut self.camera, &mut self.study, &mut self.requests);
+                    panel::show(
+                        ui,
+                        &mut s.settings,
+                        &s.shown,
+                        &pctx,
+                        &mut self.camera,
+                        &mut self.study,
+                        &mut self.requests,
+                    );
                 });
             });
             egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| {

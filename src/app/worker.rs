@@ -244,11 +244,15 @@ mod tests {
     #[test]
     fn messages_arrive_then_finished() {
         let mut slot: Slot<u32> = Slot::default();
-        slot.start("counter", || {}, |ctx| {
-            for i in 0..5 {
-                ctx.send(i);
-            }
-        })
+        slot.start(
+            "counter",
+            || {},
+            |ctx| {
+                for i in 0..5 {
+                    ctx.send(i);
+                }
+            },
+        )
         .expect("starts");
         let mut got = Vec::new();
         assert_eq!(wait_for(&mut slot, |m| got.push(m)), State::Finished);
@@ -259,10 +263,14 @@ mod tests {
     #[test]
     fn a_worker_that_dies_is_reported_as_stopped() {
         let mut slot: Slot<u32> = Slot::default();
-        slot.start("doomed", || {}, |ctx| {
-            ctx.send(1);
-            panic!("out of luck");
-        })
+        slot.start(
+            "doomed",
+            || {},
+            |ctx| {
+                ctx.send(1);
+                panic!("out of luck");
+            },
+        )
         .expect("starts");
         let mut got = Vec::new();
         let state = wait_for(&mut slot, |m| got.push(m));
@@ -275,11 +283,15 @@ mod tests {
         let mut slot: Slot<()> = Slot::default();
         let woken = Arc::new(std::sync::atomic::AtomicUsize::new(0));
         let w = Arc::clone(&woken);
-        slot.start("calibration", move || _ = w.fetch_add(1, Ordering::Relaxed), |ctx| {
-            while !ctx.cancelled() {
-                std::thread::sleep(std::time::Duration::from_millis(1));
-            }
-        })
+        slot.start(
+            "calibration",
+            move || _ = w.fetch_add(1, Ordering::Relaxed),
+            |ctx| {
+                while !ctx.cancelled() {
+                    std::thread::sleep(std::time::Duration::from_millis(1));
+                }
+            },
+        )
         .expect("starts");
         let second = slot.start("calibration", || {}, |_| {});
         assert!(matches!(second, Err(StartError::Busy(_))), "{second:?}");

@@ -22,7 +22,8 @@ use crate::msm::{MsmParams, Topology};
 /// Names and bounds of the genes of one calibration.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GeneSpace {
-    /// Gene names, in chromosome order (`k1`, `k2`, [`k3`], [`c12`, [`c13`], `c23`, [`b`]], `d`).
+    /// Gene names, in chromosome order: `k1`, `k2`, `k3` (orthotropic only), then for the richer
+    /// lattices `c12`, `c13` (orthotropic only), `c23` and `b` (hex only), and `d` last.
     pub names: Vec<String>,
     /// Lower bounds.
     pub lo: Vec<f64>,

@@ -1,7 +1,7 @@
 //! The paper's search methods: the hybrid GA+SA (XSA crossover and MSA mutation screened by the
 //! Metropolis criterion), the pure GA (no screening) and the pure SA.
 //!
-//! Choices where the paper is silent (stated here, settable in [`Settings`](super::Settings)):
+//! Choices where the paper is silent (stated here, settable in [`super::Settings`]):
 //! parents are drawn by fitness-proportional (roulette) selection, consecutive draws pair up and
 //! cross over with probability `crossover` (0.8); a crossover picks two points `i <= j` and the
 //! genes `i..=j` of each offspring are random blends `alpha p1 + (1 - alpha) p2`, the others copied
@@ -117,6 +117,7 @@ fn initial_temperature(costs: &[f64]) -> f64 {
 }
 
 /// Runs the hybrid GA+SA or the pure GA. `screen` enables XSA/MSA.
+#[allow(clippy::too_many_lines, reason = "numeric kernel: one GA+SA generation loop, read best in one piece")]
 pub fn genetic(
     problem: &Problem,
     space: &GeneSpace,

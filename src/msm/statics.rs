@@ -134,6 +134,7 @@ pub fn solve_newton(
 
 /// [`solve_newton`] with a prepared tangent pattern (reused across parameter sets of one topology)
 /// and an optional starting displacement (a warm start; rest otherwise).
+#[allow(clippy::too_many_lines, reason = "numeric kernel: the Newton / Levenberg-Marquardt iteration")]
 pub fn solve_newton_with(
     model: &MsmModel,
     case: &LoadCase,

@@ -76,6 +76,7 @@ pub const LINES_WGSL: &str = include_str!("../../shaders/lines.wgsl");
 impl CubeRenderer {
     /// Creates pipelines for colour target `format` and buffers for `mesh` and up to
     /// `max_line_vertices` overlay vertices.
+    #[allow(clippy::too_many_lines, reason = "wgpu descriptors: two pipelines and their buffers")]
     pub fn new(
         device: &wgpu::Device,
         format: wgpu::TextureFormat,

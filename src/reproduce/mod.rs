@@ -10,7 +10,6 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-
 use crate::accuracy::{CaseError, case_errors, format_table};
 use crate::calibrate::{CalibrationResult, GeneSpace, Method, Problem, Settings, Workspace, calibrate};
 use crate::grid::Grid;
@@ -100,6 +99,200 @@ fn richer_table(paper_model: &[CaseError], richer: &[(Topology, Vec<CaseError>)]
     s + "\n"
 }
 
+/// Tables III-V of one object: parameters, and the nodal errors of ours and the paper's.
+fn parameter_tables(
+    md: &mut String,
+    name: &str,
+    problem: &Problem,
+    by_method: &[(Method, Vec<CalibrationResult>)],
+    k_opt: [f64; 3],
+) -> anyhow::Result<Vec<CaseError>> {
+    let hybrid1 = by_method[0].1[0].clone();
+    // Table III.
+    let paper = paper_params(name);
+    let _ = writeln!(md, "## Object {name}\n\n### Table III: parameters (N/m, N s/m)\n");
+    let _ = writeln!(md, "| | k1 | k2 | k3 | d |\n|---|---|---|---|---|");
+    let row = |p: &MsmParams| format!("{:.1} | {:.1} | {:.1} | {:.4}", p.k1, p.k2, p.k3, p.d);
+    let _ = writeln!(md, "| paper | {} |", row(&paper));
+    let _ = writeln!(md, "| ours, hybrid seed 1 | {} |", row(&hybrid1.params));
+    let ks: Vec<[f64; 3]> = by_method[0].1.iter().map(|r| [r.params.k1, r.params.k2, r.params.k3]).collect();
+    let stats: Vec<(f64, f64)> = (0..3).map(|a| mean_sd(&ks.iter().map(|k| k[a]).collect::<Vec<_>>())).collect();
+    let _ = writeln!(
+        md,
+        "| ours, hybrid mean +- sd over seeds | {:.1} +- {:.1} | {:.1} +- {:.1} | {:.1} +- {:.1} | (not identified) |",
+        stats[0].0, stats[0].1, stats[1].0, stats[1].1, stats[2].0, stats[2].1
+    );
+    let _ =
+        writeln!(md, "| exact optimum of the same cost | {:.1} | {:.1} | {:.1} | - |\n", k_opt[0], k_opt[1], k_opt[2]);
+    let _ = writeln!(
+        md,
+        "Our `d` is {}. Eq. 1 compares equilibria, which do not depend on d, so the paper's d cannot be checked \
+         from its data either; `--cost transient` identifies d from the state 20 ms after a step load.\n",
+        hybrid1.d_note
+    );
+    // Tables IV/V.
+    let ours = errors_of(problem, &hybrid1.params)?;
+    let theirs_on_ours = errors_of(problem, &paper)?;
+    let table = if name == "A" { "IV" } else { "V" };
+    let _ = writeln!(md, "### Table {table}: nodal error (% of h), our calibration vs the paper's table\n");
+    *md += &compare_table(&ours, &paper_errors(name));
+    let _ = writeln!(
+        md,
+        "\nThe paper's own parameters evaluated against our FEM:\n\n```\n{}```\n",
+        format_table(&format!("Object {name}, paper's Table III parameters"), &theirs_on_ours)
+    );
+    Ok(ours)
+}
+
+/// The convergence table and Fig. 5/6 (SVG and CSV) of one object.
+fn convergence(
+    md: &mut String,
+    files: &mut OutputDir,
+    (fig, name, seeds): (u32, &str, u64),
+    by_method: &[(Method, Vec<CalibrationResult>)],
+    optimum: f64,
+) -> anyhow::Result<()> {
+    // Reliability and the figure.
+    let _ = writeln!(md, "### Convergence (Fig. {fig})\n\nExact optimum of the cost: {optimum:.8e} m.\n");
+    let _ = writeln!(
+        md,
+        "| method | seeds within 0.1 % of the optimum | median cost / optimum - 1 | worst | evaluations per run |\n|---|---|---|---|---|"
+    );
+    let mut csv = String::from("method,generation,mean_fitness,std_fitness,best_cost\n");
+    let mut mean_series = Vec::new();
+    let mut sd_series = Vec::new();
+    for (method, runs) in by_method {
+        let mut rel: Vec<f64> = runs.iter().map(|r| r.cost / optimum - 1.0).collect();
+        rel.sort_by(f64::total_cmp);
+        let hits = rel.iter().filter(|&&r| r <= 1e-3).count();
+        let evals = runs.iter().map(|r| r.evaluations).sum::<u64>() / runs.len() as u64;
+        let _ = writeln!(
+            md,
+            "| {method:?} | {hits}/{} | {:.2e} | {:.2e} | {evals} |",
+            runs.len(),
+            rel[rel.len() / 2],
+            rel[rel.len() - 1]
+        );
+        let gens = runs.iter().map(|r| r.history.len()).min().unwrap_or(0);
+        let avg = |f: &dyn Fn(&crate::calibrate::GenerationStats) -> f64| -> Vec<(f64, f64)> {
+            (0..gens)
+                .map(|g| (g as f64, runs.iter().map(|r| f(&r.history[g])).sum::<f64>() / runs.len() as f64))
+                .collect()
+        };
+        let m = avg(&|s| s.mean_fitness);
+        let sd = avg(&|s| s.std_fitness);
+        let best = avg(&|s| s.best_cost);
+        for g in 0..gens {
+            let _ = writeln!(csv, "{method:?},{g},{},{},{}", m[g].1, sd[g].1, best[g].1);
+        }
+        mean_series.push((format!("{method:?}"), m));
+        sd_series.push((format!("{method:?}"), sd));
+    }
+    let svg = line_panels(
+        &format!("Fig. {fig}: object {name}, fitness per generation (mean over {} seeds)", seeds),
+        "generation (SA: temperature step)",
+        &[
+            (
+                "average fitness",
+                "1/m",
+                mean_series.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect(),
+            ),
+            (
+                "standard deviation of fitness",
+                "1/m",
+                sd_series.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect(),
+            ),
+        ],
+    )?;
+    let fig_name = format!("fig{fig}_object_{name}.svg");
+    files.add(fig_name.clone(), svg);
+    files.add(format!("fig{fig}_object_{name}.csv"), csv);
+    let _ = writeln!(md, "\n![Fig. {fig}]({fig_name})\n");
+    Ok(())
+}
+
+/// How the hybrid's reach degrades as the search box widens.
+fn bounds_study(md: &mut String, problem: &Problem, space: &GeneSpace, seeds: u64, optimum: f64) -> anyhow::Result<()> {
+    let never = AtomicBool::new(false);
+    // Bounds study: the hybrid with wider boxes.
+    let _ = writeln!(
+        md,
+        "### Search bounds\n\nDefault box: k in [k*/2, 2 k*] with k* = E L^2/(n^2 h) ({}). Hybrid, same budget, seeds 1..={}:\n",
+        space.names.join(", "),
+        seeds
+    );
+    let _ = writeln!(md, "| box for k | seeds within 0.1 % | worst cost / optimum - 1 |\n|---|---|---|");
+    for widen in [2.0, 10.0, 100.0] {
+        let mut wide = space.clone();
+        for i in 0..wide.len() - 1 {
+            let k_star = (wide.lo[i] * wide.hi[i]).sqrt();
+            wide.lo[i] = k_star / widen;
+            wide.hi[i] = k_star * widen;
+        }
+        let rel: Vec<f64> = (1..=seeds)
+            .map(|seed| {
+                let s = Settings { seed, ..Settings::default() };
+                calibrate(problem, &wide, &s, &never, &mut |_| {}).map(|r| r.cost / optimum - 1.0)
+            })
+            .collect::<Result<_, _>>()?;
+        let hits = rel.iter().filter(|&&r| r <= 1e-3).count();
+        let worst = rel.iter().copied().fold(0.0, f64::max);
+        let _ = writeln!(md, "| [k*/{widen}, {widen} k*] | {hits}/{} | {worst:.2e} |", seeds);
+    }
+    *md += "\n";
+    Ok(())
+}
+
+/// The shear and hex lattices, calibrated the same way, beside the paper's model.
+fn richer_lattices(
+    md: &mut String,
+    material: &Material,
+    grid: Grid,
+    optimum: f64,
+    ours: &[CaseError],
+    all_results: &mut Vec<CalibrationResult>,
+) -> anyhow::Result<()> {
+    let never = AtomicBool::new(false);
+    let name = &material.name;
+    let mut richer: Vec<(Topology, Vec<CaseError>)> = Vec::new();
+    let _ = writeln!(
+        md,
+        "### Beyond the paper: richer lattices\n\nHybrid GA+SA, seed 1, same budget and cost. *shear*: axis + \
+         face-diagonal springs, one stiffness per plane. *hex*: the springs of every hex element (edges, face and \
+         body diagonals), a spring shared by several elements getting each one's share, so surface springs are \
+         softer (see `msm::Topology::Hex`).\n"
+    );
+    for topology in [Topology::Shear, Topology::Hex] {
+        let space = GeneSpace::new(material, &grid, topology);
+        let problem = Problem::new(material.clone(), grid, topology)?;
+        let r = calibrate(&problem, &space, &Settings::default(), &never, &mut |_| {})?;
+        let errs = errors_of(&problem, &r.params)?;
+        let p = r.params;
+        let _ = writeln!(
+            md,
+            "**{}**: k = ({:.1}, {:.1}, {:.1}), c12 = {:.1}, c13 = {:.1}, c23 = {:.1}{} N/m; cost {:.6e} m vs \
+             {:.6e} m for the best axis-only model ({:.1} % lower), {:.1} s.\n\n```\n{}```\n",
+            topology.name(),
+            p.k1,
+            p.k2,
+            p.k3,
+            p.c12.unwrap_or(0.0),
+            p.c13.unwrap_or(0.0),
+            p.c23.unwrap_or(0.0),
+            p.b.map(|b| format!(", b = {b:.1}")).unwrap_or_default(),
+            r.cost,
+            optimum,
+            100.0 * (1.0 - r.cost / optimum),
+            r.wall_s,
+            format_table(&format!("Object {name}, {} model", topology.name()), &errs)
+        );
+        richer.push((topology, errs));
+        all_results.push(r);
+    }
+    *md += &richer_table(ours, &richer);
+    Ok(())
+}
+
 fn mean_sd(v: &[f64]) -> (f64, f64) {
     let m = v.iter().sum::<f64>() / v.len() as f64;
     (m, (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt())
@@ -136,163 +329,11 @@ pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
             }
             by_method.push((method, runs));
         }
-        let hybrid1 = by_method[0].1[0].clone();
-        // Table III.
-        let paper = paper_params(&name);
-        let _ = writeln!(md, "## Object {name}\n\n### Table III: parameters (N/m, N s/m)\n");
-        let _ = writeln!(md, "| | k1 | k2 | k3 | d |\n|---|---|---|---|---|");
-        let row = |p: &MsmParams| format!("{:.1} | {:.1} | {:.1} | {:.4}", p.k1, p.k2, p.k3, p.d);
-        let _ = writeln!(md, "| paper | {} |", row(&paper));
-        let _ = writeln!(md, "| ours, hybrid seed 1 | {} |", row(&hybrid1.params));
-        let ks: Vec<[f64; 3]> = by_method[0].1.iter().map(|r| [r.params.k1, r.params.k2, r.params.k3]).collect();
-        let stats: Vec<(f64, f64)> = (0..3).map(|a| mean_sd(&ks.iter().map(|k| k[a]).collect::<Vec<_>>())).collect();
-        let _ = writeln!(
-            md,
-            "| ours, hybrid mean +- sd over seeds | {:.1} +- {:.1} | {:.1} +- {:.1} | {:.1} +- {:.1} | (not identified) |",
-            stats[0].0, stats[0].1, stats[1].0, stats[1].1, stats[2].0, stats[2].1
-        );
-        let _ = writeln!(
-            md,
-            "| exact optimum of the same cost | {:.1} | {:.1} | {:.1} | - |\n",
-            k_opt[0], k_opt[1], k_opt[2]
-        );
-        let _ = writeln!(
-            md,
-            "Our `d` is {}. Eq. 1 compares equilibria, which do not depend on d, so the paper's d cannot be checked \
-             from its data either; `--cost transient` identifies d from the state 20 ms after a step load.\n",
-            hybrid1.d_note
-        );
-        // Tables IV/V.
-        let ours = errors_of(&problem, &hybrid1.params)?;
-        let theirs_on_ours = errors_of(&problem, &paper)?;
-        let table = if name == "A" { "IV" } else { "V" };
-        let _ = writeln!(md, "### Table {table}: nodal error (% of h), our calibration vs the paper's table\n");
-        md += &compare_table(&ours, &paper_errors(&name));
-        let _ = writeln!(
-            md,
-            "\nThe paper's own parameters evaluated against our FEM:\n\n```\n{}```\n",
-            format_table(&format!("Object {name}, paper's Table III parameters"), &theirs_on_ours)
-        );
-        // Reliability and the figure.
-        let _ = writeln!(md, "### Convergence (Fig. {fig})\n\nExact optimum of the cost: {optimum:.8e} m.\n");
-        let _ = writeln!(
-            md,
-            "| method | seeds within 0.1 % of the optimum | median cost / optimum - 1 | worst | evaluations per run |\n|---|---|---|---|---|"
-        );
-        let mut csv = String::from("method,generation,mean_fitness,std_fitness,best_cost\n");
-        let mut mean_series = Vec::new();
-        let mut sd_series = Vec::new();
-        for (method, runs) in &by_method {
-            let mut rel: Vec<f64> = runs.iter().map(|r| r.cost / optimum - 1.0).collect();
-            rel.sort_by(f64::total_cmp);
-            let hits = rel.iter().filter(|&&r| r <= 1e-3).count();
-            let evals = runs.iter().map(|r| r.evaluations).sum::<u64>() / runs.len() as u64;
-            let _ = writeln!(
-                md,
-                "| {method:?} | {hits}/{} | {:.2e} | {:.2e} | {evals} |",
-                runs.len(),
-                rel[rel.len() / 2],
-                rel[rel.len() - 1]
-            );
-            let gens = runs.iter().map(|r| r.history.len()).min().unwrap_or(0);
-            let avg = |f: &dyn Fn(&crate::calibrate::GenerationStats) -> f64| -> Vec<(f64, f64)> {
-                (0..gens)
-                    .map(|g| (g as f64, runs.iter().map(|r| f(&r.history[g])).sum::<f64>() / runs.len() as f64))
-                    .collect()
-            };
-            let m = avg(&|s| s.mean_fitness);
-            let sd = avg(&|s| s.std_fitness);
-            let best = avg(&|s| s.best_cost);
-            for g in 0..gens {
-                let _ = writeln!(csv, "{method:?},{g},{},{},{}", m[g].1, sd[g].1, best[g].1);
-            }
-            mean_series.push((format!("{method:?}"), m));
-            sd_series.push((format!("{method:?}"), sd));
-        }
-        let svg = line_panels(
-            &format!("Fig. {fig}: object {name}, fitness per generation (mean over {} seeds)", opts.seeds),
-            "generation (SA: temperature step)",
-            &[
-                (
-                    "average fitness",
-                    "1/m",
-                    mean_series.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect(),
-                ),
-                (
-                    "standard deviation of fitness",
-                    "1/m",
-                    sd_series.iter().map(|(l, p)| Series { label: l, points: p.clone() }).collect(),
-                ),
-            ],
-        )?;
-        let fig_name = format!("fig{fig}_object_{name}.svg");
-        files.add(fig_name.clone(), svg);
-        files.add(format!("fig{fig}_object_{name}.csv"), csv);
-        let _ = writeln!(md, "\n![Fig. {fig}]({fig_name})\n");
-        // Bounds study: the hybrid with wider boxes.
-        let _ = writeln!(
-            md,
-            "### Search bounds\n\nDefault box: k in [k*/2, 2 k*] with k* = E L^2/(n^2 h) ({}). Hybrid, same budget, seeds 1..={}:\n",
-            space.names.join(", "),
-            opts.seeds
-        );
-        let _ = writeln!(md, "| box for k | seeds within 0.1 % | worst cost / optimum - 1 |\n|---|---|---|");
-        for widen in [2.0, 10.0, 100.0] {
-            let mut wide = space.clone();
-            for i in 0..wide.len() - 1 {
-                let k_star = (wide.lo[i] * wide.hi[i]).sqrt();
-                wide.lo[i] = k_star / widen;
-                wide.hi[i] = k_star * widen;
-            }
-            let rel: Vec<f64> = (1..=opts.seeds)
-                .map(|seed| {
-                    let s = Settings { seed, ..Settings::default() };
-                    calibrate(&problem, &wide, &s, &never, &mut |_| {}).map(|r| r.cost / optimum - 1.0)
-                })
-                .collect::<Result<_, _>>()?;
-            let hits = rel.iter().filter(|&&r| r <= 1e-3).count();
-            let worst = rel.iter().copied().fold(0.0, f64::max);
-            let _ = writeln!(md, "| [k*/{widen}, {widen} k*] | {hits}/{} | {worst:.2e} |", opts.seeds);
-        }
-        md += "\n";
-        // Beyond the paper: richer lattices, calibrated the same way.
+        let ours = parameter_tables(&mut md, &name, &problem, &by_method, k_opt)?;
+        convergence(&mut md, &mut files, (fig, &name, opts.seeds), &by_method, optimum)?;
+        bounds_study(&mut md, &problem, &space, opts.seeds, optimum)?;
         if opts.shear {
-            let mut richer: Vec<(Topology, Vec<CaseError>)> = Vec::new();
-            let _ = writeln!(
-                md,
-                "### Beyond the paper: richer lattices\n\nHybrid GA+SA, seed 1, same budget and cost. *shear*: axis + \
-                 face-diagonal springs, one stiffness per plane. *hex*: the springs of every hex element (edges, face and \
-                 body diagonals), a spring shared by several elements getting each one's share, so surface springs are \
-                 softer (see `msm::Topology::Hex`).\n"
-            );
-            for topology in [Topology::Shear, Topology::Hex] {
-                let space = GeneSpace::new(&material, &grid, topology);
-                let problem = Problem::new(material.clone(), grid, topology)?;
-                let r = calibrate(&problem, &space, &Settings::default(), &never, &mut |_| {})?;
-                let errs = errors_of(&problem, &r.params)?;
-                let p = r.params;
-                let _ = writeln!(
-                    md,
-                    "**{}**: k = ({:.1}, {:.1}, {:.1}), c12 = {:.1}, c13 = {:.1}, c23 = {:.1}{} N/m; cost {:.6e} m vs \
-                     {:.6e} m for the best axis-only model ({:.1} % lower), {:.1} s.\n\n```\n{}```\n",
-                    topology.name(),
-                    p.k1,
-                    p.k2,
-                    p.k3,
-                    p.c12.unwrap_or(0.0),
-                    p.c13.unwrap_or(0.0),
-                    p.c23.unwrap_or(0.0),
-                    p.b.map(|b| format!(", b = {b:.1}")).unwrap_or_default(),
-                    r.cost,
-                    optimum,
-                    100.0 * (1.0 - r.cost / optimum),
-                    r.wall_s,
-                    format_table(&format!("Object {name}, {} model", topology.name()), &errs)
-                );
-                richer.push((topology, errs));
-                all_results.push(r);
-            }
-            md += &richer_table(&ours, &richer);
+            richer_lattices(&mut md, &material, grid, optimum, &ours, &mut all_results)?;
         }
         for (_, runs) in by_method {
             all_results.extend(runs);
@@ -301,7 +342,7 @@ pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
     let _ = writeln!(
         md,
         "## Why our numbers differ from the paper's\n\n\
-         - The paper's FEM reference is not published beyond its material constants; ours follows `shared/spec/benchmark.md` \
+         - The paper's FEM reference is not published beyond its material constants; ours follows `assets/CONVENTIONS.md` \
            (hex8, full integration, equal nodal forces F/64, clamped face fully fixed) and agrees with an independent \
            implementation to about 1e-14. Against this reference the paper's own parameters give errors well below its \
            Tables IV/V, and the stiffness that minimises eq. 1 is about twice the paper's k.\n\

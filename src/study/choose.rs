@@ -84,7 +84,22 @@ pub fn choose(points: &[ChartPoint], object: &str, max_error_pct: f64, rate_hz: 
             p.memory_bytes as f64 / 1e3
         );
     }
-    match &chosen {
+    let meeting = mine.iter().filter(|p| ok(p)).count();
+    conclusion(&mut s, chosen.as_ref(), &mine, (max_error_pct, rate_hz, metric), meeting);
+    Choice { chosen, explanation: s }
+}
+
+/// The last paragraph of the explanation: the choice, or why nothing meets the budgets and what
+/// comes nearest.
+fn conclusion(
+    s: &mut String,
+    chosen: Option<&ChartPoint>,
+    mine: &[&ChartPoint],
+    (max_error_pct, rate_hz, metric): (f64, f64, Metric),
+    meeting: usize,
+) {
+    let budget_s = 1.0 / rate_hz;
+    match chosen {
         Some(c) => {
             let _ = write!(
                 s,
@@ -101,7 +116,7 @@ pub fn choose(points: &[ChartPoint], object: &str, max_error_pct: f64, rate_hz: 
                 c.step_s * 1e6,
                 100.0 * c.tick_s(rate_hz) / budget_s,
                 c.memory_bytes as f64 / 1e3,
-                mine.iter().filter(|p| ok(p)).count()
+                meeting
             );
         }
         None => {
@@ -136,7 +151,6 @@ pub fn choose(points: &[ChartPoint], object: &str, max_error_pct: f64, rate_hz: 
             let _ = write!(s, " Loosen the error budget or lower the rate.");
         }
     }
-    Choice { chosen, explanation: s }
 }
 
 #[cfg(test)]
