@@ -262,7 +262,6 @@ fn run(
     let mut next = start;
     let mut state = Loop { message: None, note, tools: 0, paused: false, owed: 0.0 };
     let (mut window_start, mut ticks, mut steps, mut busy) = (Instant::now(), 0u64, 0u64, Duration::ZERO);
-    let mut sim_at_window = sim.time_s;
     let mut rates = Rates::default();
     let (mut ticks_total, mut steps_total) = (0u64, 0u64);
     while !ctx.cancelled() {
@@ -308,9 +307,9 @@ fn run(
                 ticks_per_s: ticks as f64 / secs,
                 steps_per_s: steps as f64 / secs,
                 step_us: if steps > 0 { busy.as_secs_f64() * 1e6 / steps as f64 } else { 0.0 },
-                realtime: (sim.time_s - sim_at_window) / secs,
+                realtime: steps as f64 * sim.dt / secs,
             };
-            (window_start, ticks, steps, busy, sim_at_window) = (Instant::now(), 0, 0, Duration::ZERO, sim.time_s);
+            (window_start, ticks, steps, busy) = (Instant::now(), 0, 0, Duration::ZERO);
         }
         publish(&sim, out, rates, &state, (ticks_total, steps_total, start.elapsed().as_secs_f64()));
         next += TICK;

@@ -58,6 +58,8 @@ struct App {
     screenshot: Option<std::path::PathBuf>,
     stats: Stats,
     repaint_after: Option<Instant>,
+    input_until: Option<Instant>,
+    cursor_moved: bool,
     error: Option<anyhow::Error>,
 }
 
@@ -69,8 +71,11 @@ impl App {
     ) -> anyhow::Result<Self> {
         let egui = egui::Context::default();
         let wake_proxy = proxy.clone();
-        egui.set_request_repaint_callback(move |_| {
-            let _ = wake_proxy.send_event(Wake);
+        egui.set_request_repaint_callback(move |info| {
+            // A delayed request is honoured by `about_to_wait`; only an immediate one wakes now.
+            if info.delay <= Duration::from_millis(16) {
+                let _ = wake_proxy.send_event(Wake);
+            }
         });
         let repaint = egui.clone();
         let (state, first) = ViewerState::new(move || repaint.request_repaint())?;
@@ -95,6 +100,8 @@ impl App {
             screenshot,
             stats: Stats::default(),
             repaint_after: None,
+            input_until: None,
+            cursor_moved: false,
             error: None,
         })
     }
@@ -271,6 +278,17 @@ impl App {
             || self.state.busy()
             || self.study.busy()
             || self.repaint_after.is_some_and(|t| Instant::now() >= t)
+            || self.input_until.is_some_and(|t| Instant::now() < t)
+    }
+}
+
+impl App {
+    fn frame_or_exit(&mut self, event_loop: &ActiveEventLoop) {
+        self.cursor_moved = false;
+        if let Err(e) = self.frame() {
+            self.error = Some(e);
+            event_loop.exit();
+        }
     }
 }
 
@@ -294,10 +312,24 @@ impl ApplicationHandler<Wake> for App {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let press = matches!(event, WindowEvent::MouseInput { state: winit::event::ElementState::Pressed, .. });
+        if press && self.cursor_moved {
+            // The pointer moved since the last frame: let egui see it hover before the press.
+            self.frame_or_exit(event_loop);
+        }
+        self.cursor_moved |= matches!(event, WindowEvent::CursorMoved { .. });
         if let Some(s) = &mut self.surface
             && s.egui_state.on_window_event(&s.window, &event).repaint
+            && !matches!(event, WindowEvent::RedrawRequested)
         {
+            // Input: draw now and keep drawing a little while (a click spans frames).
+            self.input_until = Some(Instant::now() + Duration::from_millis(500));
             s.window.request_redraw();
+        }
+        if press {
+            // A press gets a frame of its own, so that a release arriving before the next redraw
+            // still makes a click.
+            self.frame_or_exit(event_loop);
         }
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
@@ -307,10 +339,7 @@ impl ApplicationHandler<Wake> for App {
                 }
             }
             WindowEvent::RedrawRequested => {
-                if let Err(e) = self.frame() {
-                    self.error = Some(e);
-                    event_loop.exit();
-                }
+                self.frame_or_exit(event_loop);
                 if self.max_frames.is_some_and(|m| self.stats.frames >= m) {
                     event_loop.exit();
                 }
