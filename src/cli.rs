@@ -403,22 +403,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Fem { object, bc, grid, out }) => fem_command(object, bc, grid, out),
         Some(Command::Msm { object, params, grid, out }) => msm_command(object, params, grid, out),
         Some(Command::Errors { object, params, params_file, grid, json }) => {
-            let (material, params) = match params_file {
-                Some(path) => {
-                    let file: ParamsFile = read_json(&path)?;
-                    let material = object.material(file.object.as_deref())?;
-                    file.params.validate().with_context(|| format!("in {}", path.display()))?;
-                    file.params
-                        .check_ties(material.is_transversely_isotropic())
-                        .with_context(|| format!("in {} (object {})", path.display(), material.name))?;
-                    (material, file.params)
-                }
-                None => {
-                    let material = object.material(None)?;
-                    let p = params.resolve(&material)?;
-                    (material, p)
-                }
-            };
+            let (material, params) = errors_inputs(&object, &params, params_file)?;
             errors(&material, params, grid.grid()?, json)
         }
         Some(Command::Calibrate {
@@ -454,17 +439,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             Ok(())
         }
         Some(Command::Render { out, width, height, case, colour, model, magnify }) => {
-            if !(magnify.is_finite() && magnify >= 0.0) {
-                bail!("--magnify must be a non-negative number, got {magnify}");
-            }
-            if !(16..=8192).contains(&width) || !(16..=8192).contains(&height) {
-                bail!("--width and --height must be from 16 to 8192 pixels, got {width}x{height}");
-            }
-            let scene = crate::scene::StaticScene::new(case.as_deref(), model, colour, magnify)?;
-            let png = scene.render_png(width, height)?;
-            write_atomic(&out, &png.bytes)?;
-            println!("wrote {} ({}x{}, adapter: {} / {:?})", out.display(), width, height, png.adapter, png.backend);
-            Ok(())
+            render_command(out, (width, height), case, colour, model, magnify)
         }
         Some(Command::Chart { out, objects, resolutions, no_stability }) => {
             let opts = chart_options(objects, resolutions)?;
@@ -627,6 +602,51 @@ fn calibrate_command(
         );
     }
     write_json_atomic(&out, &result)
+}
+
+fn render_command(
+    out: PathBuf,
+    (width, height): (u32, u32),
+    case: Option<String>,
+    colour: crate::scene::ColourMode,
+    model: Topology,
+    magnify: f64,
+) -> anyhow::Result<()> {
+    if !(magnify.is_finite() && magnify >= 0.0) {
+        bail!("--magnify must be a non-negative number, got {magnify}");
+    }
+    if !(16..=8192).contains(&width) || !(16..=8192).contains(&height) {
+        bail!("--width and --height must be from 16 to 8192 pixels, got {width}x{height}");
+    }
+    let scene = crate::scene::StaticScene::new(case.as_deref(), model, colour, magnify)?;
+    let png = scene.render_png(width, height)?;
+    write_atomic(&out, &png.bytes)?;
+    println!("wrote {} ({}x{}, adapter: {} / {:?})", out.display(), width, height, png.adapter, png.backend);
+    Ok(())
+}
+
+/// The material and parameters of `errors`: from a calibration result file, or from the flags.
+fn errors_inputs(
+    object: &ObjectArgs,
+    params: &ParamArgs,
+    params_file: Option<PathBuf>,
+) -> anyhow::Result<(Material, MsmParams)> {
+    Ok(match params_file {
+        Some(path) => {
+            let file: ParamsFile = read_json(&path)?;
+            let material = object.material(file.object.as_deref())?;
+            file.params.validate().with_context(|| format!("in {}", path.display()))?;
+            file.params
+                .check_ties(material.is_transversely_isotropic())
+                .with_context(|| format!("in {} (object {})", path.display(), material.name))?;
+            (material, file.params)
+        }
+        None => {
+            let material = object.material(None)?;
+            let p = params.resolve(&material)?;
+            (material, p)
+        }
+    })
 }
 
 /// A progress bar on a terminal (hidden otherwise) counting `len` `unit`.
