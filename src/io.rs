@@ -127,6 +127,10 @@ fn resolve(path: &Path) -> anyhow::Result<Target> {
     }
     let mut p = path.to_path_buf();
     for _ in 0..40 {
+        if ["/dev/stdout", "/dev/fd/1", "/proc/self/fd/1"].iter().any(|a| p == Path::new(a)) {
+            // Whatever standard output is (a terminal, a pipe, a file opened with `>` or `>>`).
+            return Ok(Target::Stdout);
+        }
         if is_descriptor_alias(&p) {
             return Ok(Target::Special(p));
         }
@@ -185,10 +189,6 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
                 .write(true)
                 .open(&p)
                 .with_context(|| format!("cannot open {} for writing", path.display()))?;
-            // A descriptor alias may lead to a regular file (a shell's `>`): start it afresh.
-            if f.metadata().is_ok_and(|m| m.is_file()) {
-                f.set_len(0).with_context(|| format!("cannot write {}", path.display()))?;
-            }
             f.write_all(bytes).with_context(|| format!("cannot write {}", path.display()))?;
             return Ok(());
         }
@@ -300,7 +300,10 @@ impl OutputDir {
             let _ = std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(0o755));
         }
         let kept = tmp.keep();
-        std::fs::rename(&kept, dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        if let Err(e) = std::fs::rename(&kept, dir) {
+            let _ = std::fs::remove_dir_all(&kept);
+            return Err(e).with_context(|| format!("cannot create {}", dir.display()));
+        }
         Ok(())
     }
 }

@@ -100,6 +100,8 @@ pub struct Published {
     pub steps_total: u64,
     /// Wall time since the thread started, s.
     pub running_s: f64,
+    /// Counts changes of `message` and `note` (the UI redraws when it moves).
+    pub revision: u64,
 }
 
 /// The physics thread died (the channel is closed).
@@ -179,6 +181,7 @@ impl PhysicsThread {
             into.params = p.params;
             into.moving = p.moving;
             into.tool_commands = p.tool_commands;
+            into.revision = p.revision;
         }
     }
 }
@@ -197,11 +200,10 @@ impl Loop {
     fn apply(&mut self, sim: &mut Simulation, cmd: Command) {
         self.paused = false;
         match cmd {
-            Command::SetParams(p) => {
-                if let Err(e) = sim.set_params(p) {
-                    self.note = Some(format!("parameters refused: {e}"));
-                }
-            }
+            Command::SetParams(p) => match sim.set_params(p) {
+                Ok(note) => self.note = note,
+                Err(e) => self.note = Some(format!("parameters refused: {e}")),
+            },
             Command::SetIntegrator(i, dt) => self.note = sim.set_integrator(i, dt),
             Command::SetTool(t) => {
                 sim.tool = t;
@@ -239,9 +241,11 @@ fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop,
         p.tool_force = sim.tool_force;
         if p.message != state.message {
             p.message.clone_from(&state.message);
+            p.revision += 1;
         }
         if p.note != state.note {
             p.note.clone_from(&state.note);
+            p.revision += 1;
         }
         p.integrator = Some((sim.integrator, sim.dt));
         p.dt_limit = sim.dt_limit();

@@ -133,8 +133,7 @@ impl ViewerState {
             Request::LoadObject => self.load_object(self.shown.topology(), send),
             Request::SelectTopology(t) => self.load_object(t, send),
             Request::EditParams(p) => {
-                let mut p = p.with_ties(self.shown.material.is_transversely_isotropic());
-                (p.k1, p.k2, p.k3) = (p.k1.max(1e-3), p.k2.max(1e-3), p.k3.max(1e-3));
+                let p = p.with_ties(self.shown.material.is_transversely_isotropic());
                 self.shown.params = p;
                 send(Command::SetParams(p));
             }
@@ -329,6 +328,9 @@ mod tests {
         assert_eq!(state.shown.topology(), Topology::Axis, "the topology follows the parameters");
         let p = wait_until(&physics, |p| p.params == Some(axis));
         assert_eq!(p.params.map(|p| p.topology()), Some(Topology::Axis), "the running model agrees");
+        // The automatic choice follows the new model's limit.
+        let auto = crate::sim::choose_integrator(None, state.shown.dt, p.dt_limit).expect("auto never refuses");
+        assert_eq!(p.integrator.map(|(i, _)| i), Some(auto));
         // Symplectic Euler asked for far above its limit: the policy on the physics side refuses.
         let limit = p.dt_limit;
         assert!(limit > 0.0 && limit.is_finite());

@@ -112,8 +112,15 @@ impl StudyPanel {
     }
 
     fn start(&mut self, object: &str, wake: impl Fn() + Send + Sync + 'static) {
-        let opts = ChartOptions { objects: vec![object.to_owned()], resolutions: vec![4, 8, 16], timing_s: 0.05 };
+        let object = object.to_owned();
         let started = self.job.start("chart", wake, move |ctx| {
+            // Cancelled (the viewer closing) between points, so that dropping the job is quick.
+            let opts = ChartOptions {
+                objects: vec![object],
+                resolutions: vec![4, 8, 16],
+                timing_s: 0.05,
+                cancel: Some(ctx.cancel_handle()),
+            };
             let result = compute(&opts, &mut |m| {
                 ctx.send(Message::Progress(m.to_owned()));
             });

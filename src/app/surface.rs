@@ -15,8 +15,9 @@ use crate::render::mesh::SurfaceMesh;
 pub struct Surface {
     /// The window.
     pub window: Arc<Window>,
-    instance: wgpu::Instance,
     surface: wgpu::Surface<'static>,
+    /// The last frame was suboptimal: configure again after presenting.
+    reconfigure: bool,
     device: wgpu::Device,
     queue: wgpu::Queue,
     config: wgpu::SurfaceConfiguration,
@@ -106,7 +107,7 @@ impl Surface {
             // anti-aliasing from the font atlas. About +15 % frame rate on lavapipe.
             egui.tessellation_options_mut(|o| o.feathering = false);
         }
-        Ok(Self { window, instance, surface, device, queue, config, depth, cube, egui_renderer, egui_state })
+        Ok(Self { window, surface, reconfigure: false, device, queue, config, depth, cube, egui_renderer, egui_state })
     }
 
     /// Follows the window's new size.
@@ -118,13 +119,14 @@ impl Surface {
     }
 
     /// The next frame's texture, or `None` (the frame is skipped) after handling whatever the
-    /// surface reported: reconfigured when outdated or suboptimal, recreated when lost, logged.
+    /// surface reported: reconfigured when outdated or lost (and after presenting a suboptimal one), logged.
     fn acquire(&mut self) -> anyhow::Result<Option<wgpu::SurfaceTexture>> {
         match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) => Ok(Some(t)),
             wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
-                // Draw this one, then match the surface again.
-                self.surface.configure(&self.device, &self.config);
+                // Draw this one; the surface is configured again once it is presented (never while
+                // a frame is held).
+                self.reconfigure = true;
                 Ok(Some(t))
             }
             wgpu::CurrentSurfaceTexture::Timeout => {
@@ -138,11 +140,7 @@ impl Surface {
                 Ok(None)
             }
             wgpu::CurrentSurfaceTexture::Lost => {
-                eprintln!("tissue-sim: surface lost; recreated");
-                self.surface = self
-                    .instance
-                    .create_surface(Arc::clone(&self.window))
-                    .context("cannot recreate the lost wgpu surface")?;
+                eprintln!("tissue-sim: surface lost; reconfigured");
                 self.surface.configure(&self.device, &self.config);
                 Ok(None)
             }
@@ -191,6 +189,9 @@ impl Surface {
         self.queue.submit([encoder.finish()]);
         self.window.pre_present_notify();
         self.queue.present(frame);
+        if std::mem::take(&mut self.reconfigure) {
+            self.surface.configure(&self.device, &self.config);
+        }
         for id in &egui.textures.free {
             self.egui_renderer.free_texture(id);
         }

@@ -8,6 +8,9 @@ use crate::render::camera::OrbitCamera;
 use crate::render::mesh::SurfaceMesh;
 use crate::sim::Tool;
 
+/// How far a tool reaches into or away from the tissue, metres (half the cube's side).
+const MAX_REACH_M: f32 = 0.05;
+
 /// The mouse gesture in progress.
 #[derive(Debug, Clone, Copy, Default)]
 pub enum Gesture {
@@ -101,14 +104,17 @@ pub fn view_input(
                 let denom = d.dot(n);
                 if denom.abs() > 1e-6 {
                     let t = (plane_point - o).dot(n) / denom;
-                    let target = o + t * d;
+                    // At most half the cube's side from where the node was picked: the drag
+                    // spring then pulls at most 50 N, and the blow-up guard (one side from rest)
+                    // is never the limit of a long mouse drag.
+                    let target = plane_point + (o + t * d - plane_point).clamp_length_max(MAX_REACH_M);
                     requests.push(Request::Tool(Tool::Drag { node, target: target.as_dvec3().to_array() }));
                 }
             }
             Gesture::Probe { contact, dir, start_y } => {
                 let r = (scene.probe_radius_mm * 1e-3) as f32;
-                // 0.1 mm of indentation per pixel dragged downwards.
-                let depth = ((pos.y - start_y) * 1e-4).max(0.0);
+                // 0.1 mm of indentation per pixel dragged downwards, at most half the cube's side.
+                let depth = ((pos.y - start_y) * 1e-4).clamp(0.0, MAX_REACH_M);
                 let centre = contact - r * dir + depth * dir;
                 requests
                     .push(Request::Tool(Tool::Probe { centre: centre.as_dvec3().to_array(), radius: f64::from(r) }));

@@ -60,6 +60,8 @@ struct App {
     repaint_after: Option<Instant>,
     input_until: Option<Instant>,
     cursor_moved: bool,
+    /// The physics thread's message revision last drawn.
+    drawn_revision: u64,
     error: Option<anyhow::Error>,
 }
 
@@ -102,6 +104,7 @@ impl App {
             repaint_after: None,
             input_until: None,
             cursor_moved: false,
+            drawn_revision: 0,
             error: None,
         })
     }
@@ -178,9 +181,7 @@ impl App {
 
     fn frame(&mut self) -> anyhow::Result<()> {
         self.physics.latest(&mut self.latest);
-        if self.physics_stopped.is_none() {
-            self.physics_stopped = self.physics.poll();
-        }
+        self.drawn_revision = self.latest.revision;
         self.state.poll();
         let Some(full) = self.run_ui() else { return Ok(()) };
         let sent = self.stats.tools_sent;
@@ -275,6 +276,7 @@ impl App {
     fn wants_redraw(&self) -> bool {
         self.max_frames.is_some()
             || self.latest.moving
+            || self.latest.revision != self.drawn_revision
             || self.state.busy()
             || self.study.busy()
             || self.repaint_after.is_some_and(|t| Instant::now() >= t)
@@ -351,7 +353,11 @@ impl ApplicationHandler<Wake> for App {
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
         // Look at the physics often enough to notice motion; draw only when something changes.
         self.physics.latest(&mut self.latest);
-        if self.wants_redraw()
+        let stopped = self.physics_stopped.is_none() && {
+            self.physics_stopped = self.physics.poll();
+            self.physics_stopped.is_some()
+        };
+        if (stopped || self.wants_redraw())
             && let Some(s) = &self.surface
         {
             s.window.request_redraw();

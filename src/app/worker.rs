@@ -33,6 +33,11 @@ impl<M> Context<M> {
     pub fn cancel_flag(&self) -> &AtomicBool {
         &self.cancel
     }
+
+    /// A shared handle to the cancel flag (for core options that carry one).
+    pub fn cancel_handle(&self) -> Arc<AtomicBool> {
+        Arc::clone(&self.cancel)
+    }
 }
 
 /// Where a worker stands after a [`Worker::poll`].

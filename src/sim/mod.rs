@@ -110,6 +110,8 @@ pub struct Simulation {
     pub tissue: Box<dyn Tissue>,
     /// Integrator.
     pub integrator: Integrator,
+    /// What was asked for (`None`: the automatic choice), kept for [`Simulation::set_params`].
+    requested: Option<Integrator>,
     /// Time step, s.
     pub dt: f64,
     /// The active tool.
@@ -151,6 +153,7 @@ impl Simulation {
         let rest = std::array::from_fn(|c| (0..nn).map(|p| grid.position(p)[c]).collect());
         Self {
             integrator,
+            requested: Some(integrator),
             dt,
             tool: Tool::None,
             time_s: 0.0,
@@ -174,9 +177,11 @@ impl Simulation {
     }
 
     /// Sets the integrator and step by [`choose_integrator`]; on a refusal switches to
-    /// prefactored implicit Euler and says so.
+    /// prefactored implicit Euler and says so. The request is kept: new parameters apply the
+    /// policy again.
     pub fn set_integrator(&mut self, requested: Option<Integrator>, dt: f64) -> Option<String> {
         self.dt = dt;
+        self.requested = requested;
         match choose_integrator(requested, dt, self.dt_limit()) {
             Ok(i) => {
                 self.integrator = i;
@@ -189,9 +194,11 @@ impl Simulation {
         }
     }
 
-    /// Replaces the parameters, keeping the state (a calibration result applied live).
-    pub fn set_params(&mut self, params: MsmParams) -> Result<(), String> {
-        self.tissue.set_params(params)
+    /// Replaces the parameters, keeping the state (a calibration result applied live), and
+    /// applies the integrator policy to the new explicit limit (what it says, if anything).
+    pub fn set_params(&mut self, params: MsmParams) -> Result<Option<String>, String> {
+        self.tissue.set_params(params)?;
+        Ok(self.set_integrator(self.requested, self.dt))
     }
 
     /// Node displacements from rest, row = node.
@@ -260,8 +267,9 @@ impl Simulation {
                  for this stiffness; the state was reset. Lower dt or choose the implicit integrator.",
                 self.dt
             ),
-            (Ok(()), _, Some(Unhealthy::OutsideCube)) if dragging => "a node was pulled more than the cube's side \
-                 (0.1 m) from rest; the state was reset. Drag targets are in metres: keep them near the cube."
+            (Ok(()), _, Some(Unhealthy::OutsideCube)) if dragging => "the dragged node was pulled more than the \
+                 cube's side (0.1 m) from rest; the state was reset. Keep the drag target near the cube (positions \
+                 are in metres)."
                 .to_owned(),
             (Ok(()), _, Some(Unhealthy::OutsideCube)) => "a node moved more than the cube's side (0.1 m) from rest; \
                  the state was reset. Lower the loads or dt, or choose the implicit integrator."

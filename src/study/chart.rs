@@ -177,11 +177,13 @@ pub struct ChartOptions {
     pub resolutions: Vec<usize>,
     /// Timing budget per measured step, s.
     pub timing_s: f64,
+    /// Set (by another thread) to stop between points with an error.
+    pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 impl Default for ChartOptions {
     fn default() -> Self {
-        Self { objects: vec!["A".into(), "B".into()], resolutions: vec![4, 8, 16, 32], timing_s: 0.15 }
+        Self { objects: vec!["A".into(), "B".into()], resolutions: vec![4, 8, 16, 32], timing_s: 0.15, cancel: None }
     }
 }
 
@@ -465,6 +467,9 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
         for &n in &opts.resolutions {
             let grid = Grid::new(n)?;
             for kind in ModelKind::ALL {
+                if opts.cancel.as_ref().is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+                    anyhow::bail!("the chart was cancelled");
+                }
                 progress(&format!(
                     "object {object}: {} at {n}^3 ({:.1} s)",
                     kind.name(),

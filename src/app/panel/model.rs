@@ -43,21 +43,22 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
     let ti = shown.material.is_transversely_isotropic();
     let mut changed = false;
     egui::Grid::new("params").num_columns(2).show(ui, |ui| {
-        let mut row = |ui: &mut egui::Ui, name: &str, v: &mut f64, unit: &str| {
+        // An axis spring needs stiffness (the model refuses less than its range); diagonals may be 0.
+        let mut row = |ui: &mut egui::Ui, name: &str, v: &mut f64, min: f64| {
             ui.label(name);
-            changed |= ui.add(egui::DragValue::new(v).speed(5.0).range(0.0..=1e6).suffix(unit)).changed();
+            changed |= ui.add(egui::DragValue::new(v).speed(5.0).range(min..=1e6).suffix(" N/m")).changed();
             ui.end_row();
         };
-        row(ui, "k1", &mut p.k1, " N/m");
-        row(ui, "k2", &mut p.k2, " N/m");
+        row(ui, "k1", &mut p.k1, 1e-3);
+        row(ui, "k2", &mut p.k2, 1e-3);
         if !ti {
-            row(ui, "k3", &mut p.k3, " N/m");
+            row(ui, "k3", &mut p.k3, 1e-3);
         }
         for (name, c) in [("c12", &mut p.c12), ("c13", &mut p.c13), ("c23", &mut p.c23), ("b", &mut p.b)] {
             if let Some(v) = c
                 && !(ti && name == "c13")
             {
-                row(ui, name, v, " N/m");
+                row(ui, name, v, 0.0);
             }
         }
         ui.label("d");
