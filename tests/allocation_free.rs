@@ -65,4 +65,26 @@ fn explicit_and_implicit_steps_do_not_allocate() {
         (0, 0, 0),
         "allocations in 100 explicit / 10 implicit / 10 prefactored steps"
     );
+    // The interactive simulation over the Tissue trait, with each tool and the guard's good-state
+    // copies: allocation-free too. (In the same test: the counter is global to the binary.)
+    use tissue_sim::sim::{Integrator, Simulation, Tool};
+    let mut sim = Simulation::new(model, Integrator::Symplectic, 1e-5, Some(&LoadCase::clamped(&grid, "A", 3, 0.0)));
+    let tools = [
+        Tool::Drag { node: 511, target: [0.11, 0.1, 0.105] },
+        Tool::Probe { centre: [0.05, 0.05, 0.1 + 0.015 - 0.002], radius: 0.015 },
+        Tool::None,
+    ];
+    for t in tools {
+        sim.tool = t;
+        sim.step().expect("warm-up step");
+    }
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    for t in tools {
+        sim.tool = t;
+        for _ in 0..200 {
+            sim.step().expect("step");
+        }
+    }
+    let simulated = ALLOCATIONS.load(Ordering::Relaxed) - before;
+    assert_eq!(simulated, 0, "allocations in 600 simulation steps with drag, probe and no tool");
 }
