@@ -3,7 +3,8 @@
 //! - [`viewer`]: the event loop and the frame; [`surface`]: the window and its wgpu surface.
 //! - [`state`]: the window-free viewer state, which turns [`state::Request`]s into physics
 //!   commands, over what [`settings`] holds; [`panel`]: the side panel, a file per section; [`tools`]: mouse gestures;
-//!   [`overlay`]: colour scalar, legend and lines, once per frame.
+//!   [`overlay`]: colour scalar, legend and lines, once per frame; [`stats`]: frame rate and tool
+//!   latency.
 //! - Threads, all [`worker::Worker`]s: [`physics`] (steps the simulation), [`calibration`], the
 //!   chart of [`study_panel`], and the FEM answer of a load case. The UI thread only draws and
 //!   forwards input.
@@ -14,6 +15,7 @@ pub mod panel;
 pub mod physics;
 pub mod settings;
 pub mod state;
+pub mod stats;
 pub mod study_panel;
 pub mod surface;
 pub mod tools;

@@ -14,6 +14,7 @@ use super::overlay::{Overlay, Show, legend};
 use super::panel::{self, PanelContext};
 use super::physics::{Command, PhysicsThread, Published};
 use super::state::{Request, ViewerState};
+use super::stats::Stats;
 use super::study_panel::StudyPanel;
 use super::surface::{CubeFrame, EguiFrame, Surface};
 use super::tools::{Gesture, Scene, view_input};
@@ -25,20 +26,6 @@ use crate::scene::ColourMode;
 /// A wake-up from a background thread (egui asked for a repaint).
 #[derive(Debug, Clone, Copy)]
 pub struct Wake;
-
-/// Frame statistics: rate, and the input-to-screen latency of tool commands.
-#[derive(Default)]
-struct Stats {
-    frames: u64,
-    fps: f64,
-    clock: Option<(Instant, u64)>,
-    /// Tool commands sent, and when each still unseen on screen was sent.
-    tools_sent: u64,
-    pending: std::collections::VecDeque<(u64, Instant)>,
-    /// (sum s, count, max s) since the last report, and the last report (mean, max).
-    latency: (f64, u64, f64),
-    latency_shown: (f64, f64),
-}
 
 struct App {
     surface: Option<Surface>,
@@ -116,10 +103,7 @@ impl App {
         let mut dead = false;
         let mut send = |c: Command| {
             if matches!(c, Command::SetTool(_)) {
-                stats.tools_sent += 1;
-                if stats.pending.len() < 256 {
-                    stats.pending.push_back((stats.tools_sent, Instant::now()));
-                }
+                stats.sent();
             }
             dead |= physics.send(c).is_err();
         };
@@ -196,7 +180,7 @@ impl App {
             }
         }
         self.draw(full)?;
-        self.count_frame();
+        self.stats.count_frame(self.max_frames.is_some(), self.latest.rates);
         Ok(())
     }
 
@@ -230,45 +214,9 @@ impl App {
         };
         let egui = EguiFrame { jobs, textures: full.textures_delta, pixels_per_point: full.pixels_per_point };
         if surface.draw(&cube, egui)? {
-            // Tool commands whose effect this frame showed: their input-to-photon latency.
-            let shown = self.latest.tool_commands;
-            let st = &mut self.stats;
-            while let Some(&(seq, sent)) = st.pending.front() {
-                if seq > shown {
-                    break;
-                }
-                let l = sent.elapsed().as_secs_f64();
-                st.latency = (st.latency.0 + l, st.latency.1 + 1, st.latency.2.max(l));
-                st.pending.pop_front();
-            }
+            self.stats.shown(self.latest.tool_commands);
         }
         Ok(())
-    }
-
-    fn count_frame(&mut self) {
-        let st = &mut self.stats;
-        st.frames += 1;
-        let (since, count) = *st.clock.get_or_insert((Instant::now(), 0));
-        if since.elapsed().as_secs_f64() < 1.0 {
-            return;
-        }
-        st.fps = (st.frames - count) as f64 / since.elapsed().as_secs_f64();
-        st.clock = Some((Instant::now(), st.frames));
-        if st.latency.1 > 0 {
-            st.latency_shown = (st.latency.0 / st.latency.1 as f64, st.latency.2);
-            st.latency = (0.0, 0, 0.0);
-        }
-        if self.max_frames.is_some() {
-            let r = self.latest.rates;
-            eprintln!(
-                "fps {:.1}, physics {:.0} ticks/s, {:.1} us/step, tool latency mean {:.1} ms max {:.1} ms",
-                st.fps,
-                r.ticks_per_s,
-                r.step_us,
-                st.latency_shown.0 * 1e3,
-                st.latency_shown.1 * 1e3
-            );
-        }
     }
 
     /// Whether the next frame should be drawn now: something moves, a job reports, egui asked,
