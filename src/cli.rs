@@ -127,42 +127,7 @@ pub enum Command {
         json: bool,
     },
     /// Calibrate the MSM against the FEM reference with the paper's GA+SA (or pure GA / SA).
-    Calibrate {
-        #[command(flatten)]
-        object: ObjectArgs,
-        /// Search method.
-        #[arg(long, value_enum, default_value = "hybrid")]
-        method: Method,
-        /// Random seed (same seed and settings: same result).
-        #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
-        seed: u64,
-        /// Population size.
-        #[arg(long, default_value_t = 50, allow_hyphen_values = true)]
-        population: usize,
-        /// Generations (temperature steps for SA).
-        #[arg(long, default_value_t = 100, allow_hyphen_values = true)]
-        generations: usize,
-        /// Mutation probability per chromosome.
-        #[arg(long, default_value_t = 0.2, allow_hyphen_values = true)]
-        mutation: f64,
-        /// Crossover probability per selected pair.
-        #[arg(long, default_value_t = 0.8, allow_hyphen_values = true)]
-        crossover: f64,
-        /// Cost: static equilibria (the paper's).
-        #[arg(long, value_enum, default_value = "static")]
-        cost: CostMode,
-        /// MSM topology: the paper's axis springs, axis + face-diagonal (shear) springs, or the hex-element lattice.
-        #[arg(long, value_enum, default_value = "axis")]
-        model: Topology,
-        /// Override a gene's search bounds, e.g. `--bound k1=100:5000` (repeatable).
-        #[arg(long = "bound", value_name = "GENE=LO:HI")]
-        bounds: Vec<String>,
-        #[command(flatten)]
-        grid: GridArgs,
-        /// Output JSON file (the spec's calibration result).
-        #[arg(long)]
-        out: PathBuf,
-    },
+    Calibrate(CalibrateArgs),
     /// Regenerate the paper's Tables III-V and Figs. 5-6 (report.md, SVG plots, data) in DIR.
     Reproduce {
         /// Output directory (created if missing).
@@ -260,6 +225,46 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+/// The flags of `calibrate`.
+#[derive(Debug, Args)]
+#[allow(missing_docs)] // flattened argument groups document their own fields
+pub struct CalibrateArgs {
+    #[command(flatten)]
+    pub object: ObjectArgs,
+    /// Search method.
+    #[arg(long, value_enum, default_value = "hybrid")]
+    pub method: Method,
+    /// Random seed (same seed and settings: same result).
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
+    pub seed: u64,
+    /// Population size.
+    #[arg(long, default_value_t = 50, allow_hyphen_values = true)]
+    pub population: usize,
+    /// Generations (temperature steps for SA).
+    #[arg(long, default_value_t = 100, allow_hyphen_values = true)]
+    pub generations: usize,
+    /// Mutation probability per chromosome.
+    #[arg(long, default_value_t = 0.2, allow_hyphen_values = true)]
+    pub mutation: f64,
+    /// Crossover probability per selected pair.
+    #[arg(long, default_value_t = 0.8, allow_hyphen_values = true)]
+    pub crossover: f64,
+    /// Cost: static equilibria (the paper's).
+    #[arg(long, value_enum, default_value = "static")]
+    pub cost: CostMode,
+    /// MSM topology: the paper's axis springs, axis + face-diagonal (shear) springs, or the hex-element lattice.
+    #[arg(long, value_enum, default_value = "axis")]
+    pub model: Topology,
+    /// Override a gene's search bounds, e.g. `--bound k1=100:5000` (repeatable).
+    #[arg(long = "bound", value_name = "GENE=LO:HI")]
+    pub bounds: Vec<String>,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Output JSON file (the spec's calibration result).
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 /// Which material: a preset object or a file.
@@ -406,33 +411,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             let (material, params) = errors_inputs(&object, &params, params_file)?;
             errors(&material, params, grid.grid()?, json)
         }
-        Some(Command::Calibrate {
-            object,
-            method,
-            seed,
-            population,
-            generations,
-            mutation,
-            crossover,
-            cost,
-            model,
-            bounds,
-            grid,
-            out,
-        }) => calibrate_command(
-            object,
-            method,
-            seed,
-            population,
-            generations,
-            mutation,
-            crossover,
-            cost,
-            model,
-            bounds,
-            grid,
-            out,
-        ),
+        Some(Command::Calibrate(args)) => calibrate_command(args),
         Some(Command::Reproduce { out, seeds, no_shear }) => {
             crate::reproduce::run(&out, &crate::reproduce::Options { seeds, shear: !no_shear })?;
             println!("wrote {}", out.join("report.md").display());
@@ -554,21 +533,21 @@ fn choose_command(
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments, reason = "the calibrate command's flags, one argument each")]
-fn calibrate_command(
-    object: ObjectArgs,
-    method: Method,
-    seed: u64,
-    population: usize,
-    generations: usize,
-    mutation: f64,
-    crossover: f64,
-    cost: CostMode,
-    model: Topology,
-    bounds: Vec<String>,
-    grid: GridArgs,
-    out: PathBuf,
-) -> anyhow::Result<()> {
+fn calibrate_command(args: CalibrateArgs) -> anyhow::Result<()> {
+    let CalibrateArgs {
+        object,
+        method,
+        seed,
+        population,
+        generations,
+        mutation,
+        crossover,
+        cost,
+        model,
+        bounds,
+        grid,
+        out,
+    } = args;
     let material = object.material(None)?;
     let grid = grid.grid()?;
     let settings = Settings { method, seed, population, generations, mutation, crossover, cost, ..Settings::default() };
