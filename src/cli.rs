@@ -7,7 +7,7 @@ use anyhow::{Context as _, bail};
 use clap::{Args, Parser, Subcommand};
 
 use crate::accuracy::{case_errors, cost, format_table};
-use crate::calibrate::{CostMode, GeneSpace, Method, Problem, Settings, calibrate};
+use crate::calibrate::{CaseSet, CostMode, GeneSpace, Method, Problem, Settings, calibrate};
 use crate::cases::{Bc, benchmark_cases};
 use crate::fem::FemModel;
 use crate::fem::dynamics::Formulation;
@@ -58,6 +58,12 @@ value_enum!(Method {
     Hybrid => "hybrid", "GA with Metropolis screening of crossover (XSA) and mutation (MSA): the paper's method";
     Ga => "ga", "Plain GA, same operators and settings, no screening";
     Sa => "sa", "Simulated annealing alone: `sa_iterations` moves at each of `generations` temperatures";
+    StiffnessFit => "stiffness-fit", "Load-free baseline: non-negative least-squares fit of the lattice's stiffness matrix to the FEM's";
+});
+value_enum!(CaseSet {
+    Paper => "paper", "The paper's nine clamped face loads (eq. 1)";
+    Touch => "touch", "The touch benchmark's training cases (point loads, top shear, probe), then an L-BFGS polish";
+    Both => "both", "The touch cost plus the paper's cost relative to the FEM's displacements";
 });
 value_enum!(CostMode {
     Static => "static", "Static equilibria (the paper's cost; `d` is not identified)";
@@ -193,8 +199,8 @@ pub enum Command {
         /// Colour map: none, displacement magnitude, or MSM-vs-FEM error.
         #[arg(long, value_enum, default_value = "displacement")]
         colour: ColourMode,
-        /// MSM: the calibrated shear-spring tissue (default), the hex-element lattice or the paper's axis springs.
-        #[arg(long, value_enum, default_value = "shear")]
+        /// MSM: the default hex-element tissue, the shear-spring lattice or the paper's axis springs.
+        #[arg(long, value_enum, default_value = "hex")]
         model: Topology,
         /// Displacement magnification of the drawn shape.
         #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
@@ -218,6 +224,24 @@ pub enum Command {
         /// After closing, save the final 3D view (offscreen, 960x540) as PNG.
         #[arg(long)]
         screenshot: Option<PathBuf>,
+    },
+    /// The touch benchmark: a model's compliance, field error and modes against the hex8 FEM where
+    /// the viewer's user touches the cube (face z = 0 clamped; point loads, top-face shear, the
+    /// probe), on training and held-out validation cases.
+    Validate {
+        #[command(flatten)]
+        object: ObjectArgs,
+        #[command(flatten)]
+        grid: GridArgs,
+        /// A calibration result (JSON with `params`); default: the viewer's default tissue.
+        #[arg(long, value_name = "FILE.json", conflicts_with = "model")]
+        params: Option<PathBuf>,
+        /// A FEM model instead of a spring lattice.
+        #[arg(long, value_parser = ["fem-linear", "fem-corotational"])]
+        model: Option<String>,
+        /// Print JSON (the benchmark's contract) instead of the table.
+        #[arg(long)]
+        json: bool,
     },
     /// Speed benchmark of the physics core (release build).
     Bench {
@@ -257,6 +281,9 @@ pub struct CalibrateArgs {
     /// MSM topology: the paper's axis springs, axis + face-diagonal (shear) springs, or the hex-element lattice.
     #[arg(long, value_enum, default_value = "axis")]
     pub model: Topology,
+    /// Training cases: the paper's nine face loads, the touch benchmark's training set, or both.
+    #[arg(long, value_enum, default_value = "paper")]
+    pub cases: CaseSet,
     /// Override a gene's search bounds, e.g. `--bound k1=100:5000` (repeatable).
     #[arg(long = "bound", value_name = "GENE=LO:HI")]
     pub bounds: Vec<String>,
@@ -287,7 +314,7 @@ pub struct GridArgs {
 }
 
 /// MSM parameters on the command line.
-#[derive(Debug, Args)]
+#[derive(Debug, Default, Args)]
 pub struct ParamArgs {
     /// Axis-1 spring stiffness, N/m.
     #[arg(long, allow_hyphen_values = true)]
@@ -429,6 +456,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Choose { max_error, rate, object, metric, chart }) => {
             choose_command(max_error, rate, object, metric, chart)
         }
+        Some(Command::Validate { object, grid, params, model, json }) => {
+            validate_command(&object, &grid, params, model.as_deref(), json)
+        }
         Some(Command::Bench { json }) => {
             let report = crate::bench::run()?;
             if json {
@@ -544,6 +574,7 @@ fn calibrate_command(args: CalibrateArgs) -> anyhow::Result<()> {
         crossover,
         cost,
         model,
+        cases,
         bounds,
         grid,
         out,
@@ -565,6 +596,7 @@ fn calibrate_command(args: CalibrateArgs) -> anyhow::Result<()> {
     }
     let name = material.name.clone();
     let problem = Problem::new(material, grid, model)
+        .and_then(|p| p.with_cases(cases))
         .with_context(|| format!("the FEM reference of material {name} at {}^3", grid.n()))?;
     let bar = progress_bar(generations as u64, "generations");
     let cancel = std::sync::atomic::AtomicBool::new(false);
@@ -628,6 +660,44 @@ fn errors_inputs(
     })
 }
 
+/// `validate`: the touch benchmark of one model.
+fn validate_command(
+    object: &ObjectArgs,
+    grid: &GridArgs,
+    params: Option<PathBuf>,
+    model: Option<&str>,
+    json: bool,
+) -> anyhow::Result<()> {
+    use crate::touch::ModelUnderTest;
+    let grid = grid.grid()?;
+    let (material, model) = match (params, model) {
+        (Some(path), _) => {
+            let (material, p) = errors_inputs(object, &ParamArgs::default(), Some(path))?;
+            (material, ModelUnderTest::Lattice(p))
+        }
+        (None, Some(name)) => {
+            let f = if name == "fem-linear" { Formulation::Linear } else { Formulation::Corotational };
+            (object.material(None)?, ModelUnderTest::Fem(f))
+        }
+        (None, None) => {
+            let material = object.material(None)?;
+            let p = crate::tissue::default_params(&material)
+                .context("the default tissue: give --params FILE.json or --model fem-linear")?;
+            (material, ModelUnderTest::Lattice(p))
+        }
+    };
+    check_solver_size("validate", Bc::Clamped, grid.n())?;
+    let reference = crate::touch::Reference::new(&material, grid)?;
+    let report = crate::touch::score::evaluate(&reference, &material, &model)
+        .with_context(|| format!("scoring {} of material {}", model.name(), material.name))?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", report.to_text());
+    }
+    Ok(())
+}
+
 /// A progress bar on a terminal (hidden otherwise) counting `len` `unit`.
 fn progress_bar(len: u64, unit: &str) -> indicatif::ProgressBar {
     if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
@@ -653,6 +723,7 @@ pub const MAX_NODES_MSM_NEWTON: usize = 40;
 fn check_solver_size(solver: &str, bc: Bc, n: usize) -> anyhow::Result<()> {
     let (max, what) = match (solver, bc) {
         ("fem", Bc::Patch) => (MAX_NODES_FEM_PATCH, "the FEM patch cases (a full, unreduced system)"),
+        ("validate", _) => (MAX_NODES_FEM_PATCH, "the touch benchmark (full, unreduced systems)"),
         ("msm", _) => (MAX_NODES_MSM_NEWTON, "the static Newton solve of the shear and hex lattices"),
         _ => return Ok(()),
     };
@@ -749,7 +820,8 @@ mod tests {
         check::<Formulation>(|v| v.name().into());
         check::<Bc>(|v| v.name().into());
         check::<Topology>(|v| v.name().into());
-        check::<Method>(|v| format!("{v:?}").to_lowercase());
+        check::<Method>(|v| v.name().into());
+        check::<CaseSet>(|v| v.name().into());
         check::<CostMode>(|v| format!("{v:?}").to_lowercase());
         check::<ColourMode>(|v| format!("{v:?}").to_lowercase());
         assert_eq!(Metric::value_variants().len(), 2);

@@ -11,6 +11,8 @@
 //!   [`tissue`] (the shipped calibrated tissues), [`sim`] (the interactive simulation over any
 //!   tissue model), [`calibrate`] (GA+SA), [`accuracy`] (cost and error tables), [`io`] (JSON and
 //!   safe output files).
+//! - [`touch`]: the touch benchmark (held-out point, shear and probe touches, modes) behind
+//!   `validate`.
 //! - Studies: [`study`] (speed against accuracy, stability, choice), [`reproduce`] (the paper's
 //!   tables and figures), [`bench`](mod@bench) (timings), [`script`] (`simulate`).
 //! - Presentation: [`render`] (wgpu renderer, offscreen), [`scene`] (what is drawn).
@@ -35,3 +37,4 @@ pub mod sim;
 pub mod sparse;
 pub mod study;
 pub mod tissue;
+pub mod touch;

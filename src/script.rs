@@ -3,7 +3,7 @@
 //! the same bytes.
 //!
 //! ```json
-//! { "object": "A", "model": "shear", "dt": 1e-4, "integrator": "symplectic",
+//! { "object": "A", "model": "hex", "dt": 1e-4, "integrator": "symplectic",
 //!   "clamp": "bottom",
 //!   "actions": [
 //!     { "drag":    { "node": 511, "to": [0.11, 0.1, 0.1], "duration_s": 0.2 } },
@@ -31,9 +31,7 @@ use serde::{Deserialize, Serialize};
 use crate::cases::{LoadCase, parse_case_id};
 use crate::grid::Grid;
 use crate::material::Material;
-use crate::msm::Topology;
-use crate::sim::{Integrator, MsmTissue, Simulation, Tissue as _, Tool, choose_integrator};
-use crate::tissue::tissue_params;
+use crate::sim::{Integrator, ModelChoice, Simulation, Tool, choose_integrator};
 
 /// A script.
 #[derive(Debug, Clone, Deserialize)]
@@ -41,9 +39,9 @@ use crate::tissue::tissue_params;
 pub struct Script {
     /// `A` or `B`.
     pub object: String,
-    /// `shear` (default) or `axis`.
+    /// `hex` (the default tissue), `shear`, `axis`, `fem-linear` or `fem-corotational`.
     #[serde(default = "default_model")]
-    pub model: Topology,
+    pub model: ModelChoice,
     /// Time step, s (default 1e-4).
     #[serde(default = "default_dt")]
     pub dt: f64,
@@ -56,8 +54,8 @@ pub struct Script {
     pub actions: Vec<Action>,
 }
 
-fn default_model() -> Topology {
-    Topology::Shear
+fn default_model() -> ModelChoice {
+    ModelChoice::Lattice(crate::tissue::DEFAULT_TOPOLOGY)
 }
 fn default_dt() -> f64 {
     1e-4
@@ -176,7 +174,7 @@ pub struct Outcome {
     /// Object label.
     pub object: String,
     /// Model.
-    pub model: Topology,
+    pub model: ModelChoice,
     /// Integrator used.
     pub integrator: Integrator,
     /// Time step, s.
@@ -244,13 +242,12 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     let material = Material::preset(&script.object)
         .ok_or_else(|| anyhow::anyhow!("script: object must be A or B, got {:?}", script.object))?;
     check_bounds(script)?;
-    let params = tissue_params(&material, script.model)?;
-    let tissue = MsmTissue::build(params, material.density)?;
+    let tissue = script.model.build(&material, None)?;
     let integrator = choose_integrator(script.integrator, script.dt, tissue.explicit_dt_limit()).map_err(|why| {
         anyhow::anyhow!("script: {why}; lower dt, or choose \"integrator\": \"prefactored\" (or leave it out)")
     })?;
     let case = clamp_case(&grid, &material.name, &script.clamp)?;
-    let mut sim = Simulation::with_tissue(Box::new(tissue), integrator, script.dt, case.as_ref());
+    let mut sim = Simulation::with_tissue(tissue, integrator, script.dt, case.as_ref());
     let rest = grid.positions();
     let mut out = Outcome {
         object: material.name.clone(),

@@ -1,15 +1,64 @@
 //! The calibrated tissues shipped in `assets/`: the mass-spring parameters of the preset objects
-//! `A` and `B` for each lattice topology.
+//! `A` and `B` for each lattice topology, and the scores each was measured to have on the touch
+//! benchmark's validation set (cases its calibration never saw).
+//!
+//! The shear and hex lattices are calibrated on the touch benchmark's training cases
+//! (`calibrate --cases touch`), the paper's axis lattice on the paper's nine face loads (it has no
+//! shear stiffness at rest, so no touch case can train it). The default tissue is the lattice
+//! that scores best on the validation set: the hex lattice, for both objects.
 
 use anyhow::Context as _;
 
 use crate::material::Material;
 use crate::msm::{MsmParams, Topology};
 
-/// The calibrated tissue parameters shipped in `assets/` for object `A` or `B`: the shear-spring
-/// model (the viewer's default), the hex-element model or the paper's axis-spring model, all calibrated by this program
-/// (hybrid GA+SA, seed 1, static cost; see each file's `note`).
+/// The topology of the default tissue (the viewer's, `simulate`'s and `validate`'s): the lattice
+/// with the smallest validation force error (see [`shipped`] and `assets/`).
+pub const DEFAULT_TOPOLOGY: Topology = Topology::Hex;
+
+/// The validation scores recorded in a shipped tissue file (`validate --json`, validation set).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RecordedScores {
+    /// Largest `|1 - compliance ratio|` over the validation touches.
+    pub worst_force_error: f64,
+    /// Median over the validation touches.
+    pub median_force_error: f64,
+    /// Largest `|1 - f / f_fem|` over the lowest six modes.
+    pub worst_frequency_error: f64,
+}
+
+/// A shipped tissue: its parameters, the training cases of its calibration, and its recorded
+/// validation scores (none for the axis lattice, which the touch benchmark cannot score).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+pub struct Shipped {
+    /// The parameters.
+    pub params: MsmParams,
+    /// `paper` or `touch`.
+    #[serde(default = "paper_cases")]
+    pub cases: crate::calibrate::CaseSet,
+    /// Scores on the touch benchmark's validation set.
+    #[serde(default)]
+    pub validation: Option<RecordedScores>,
+}
+
+fn paper_cases() -> crate::calibrate::CaseSet {
+    crate::calibrate::CaseSet::Paper
+}
+
+/// The calibrated tissue parameters shipped in `assets/` for object `A` or `B` (see [`shipped`]).
 pub fn tissue_params(material: &Material, topology: Topology) -> anyhow::Result<MsmParams> {
+    Ok(shipped(material, topology)?.params)
+}
+
+/// The default tissue of a preset material ([`DEFAULT_TOPOLOGY`]).
+pub fn default_params(material: &Material) -> anyhow::Result<MsmParams> {
+    tissue_params(material, DEFAULT_TOPOLOGY)
+}
+
+/// The shipped tissue of object `A` or `B` for `topology`: the shear and hex lattices calibrated
+/// on the touch benchmark's training cases, the axis lattice on the paper's cases (hybrid GA+SA,
+/// seed 1, static cost, then the L-BFGS polish; see each file's `note`).
+pub fn shipped(material: &Material, topology: Topology) -> anyhow::Result<Shipped> {
     let is_preset = Material::preset(&material.name)
         .is_some_and(|p| p.constants == material.constants && p.density == material.density);
     if !is_preset {
@@ -27,10 +76,5 @@ pub fn tissue_params(material: &Material, topology: Topology) -> anyhow::Result<
         ("B", Topology::Hex) => include_str!("../assets/tissue_B_hex.json"),
         (other, _) => anyhow::bail!("no calibrated tissue is shipped for object {other:?}; calibrate one"),
     };
-    #[derive(serde::Deserialize)]
-    struct Shipped {
-        params: MsmParams,
-    }
-    let shipped: Shipped = serde_json::from_str(text).context("assets: invalid tissue file")?;
-    Ok(shipped.params)
+    serde_json::from_str(text).context("assets: invalid tissue file")
 }

@@ -405,3 +405,87 @@ fn the_readme_examples_run() {
         assert!(r.status.success(), "{args:?}: {}", stderr(&r));
     }
 }
+
+#[test]
+fn validate_prints_the_touch_benchmark_contract() {
+    let o = run(&["validate", "--object", "B", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    for key in ["object", "model", "nodes_per_axis", "cases", "modes_hz", "fem_modes_hz"] {
+        assert!(!v[key].is_null(), "missing {key}");
+    }
+    for key in ["worst_force_error", "median_force_error", "worst_frequency_error"] {
+        assert!(v[key].as_f64().is_some_and(|x| x.is_finite() && x >= 0.0), "{key}: {}", v[key]);
+    }
+    assert_eq!(v["object"], "B");
+    assert_eq!(v["nodes_per_axis"], 8);
+    let cases = v["cases"].as_array().expect("cases");
+    for kind in ["point", "shear", "probe"] {
+        assert!(cases.iter().any(|c| c["kind"] == kind), "no {kind} case");
+    }
+    for set in ["training", "validation"] {
+        assert!(cases.iter().any(|c| c["set"] == set), "no {set} case");
+    }
+    for c in cases {
+        for key in ["id", "compliance_ratio", "field_error", "avg_pct_h", "max_pct_h"] {
+            assert!(!c[key].is_null(), "case without {key}");
+        }
+    }
+    let modes = v["modes_hz"].as_array().expect("modes");
+    assert_eq!(modes.len(), 6);
+    assert!(modes.windows(2).all(|w| w[0].as_f64() <= w[1].as_f64()), "modes not ascending");
+    // The FEM scores itself exactly; the axis lattice is refused by name.
+    let o = run(&["validate", "--object", "A", "--model", "fem-corotational", "--nodes", "5", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(v["model"], "fem-corotational");
+    assert!(v["worst_force_error"].as_f64().expect("number") < 1e-9);
+    let o = run(&["validate", "--object", "A", "--params", "assets/tissue_A_axis.json"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("no shear stiffness"), "{}", stderr(&o));
+    let o = run(&["validate", "--object", "A", "--nodes", "3"]);
+    assert!(!o.status.success() && stderr(&o).contains("at least 4 nodes"), "{}", stderr(&o));
+}
+
+#[test]
+fn calibrate_on_touch_cases_polishes_and_the_stiffness_fit_runs() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("touch.json");
+    let args = ["calibrate", "--object", "B", "--model", "hex", "--cases", "touch", "--nodes", "5"];
+    let o =
+        run(&[&args[..], &["--population", "8", "--generations", "4", "--out", out.to_str().expect("utf8")]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).expect("read")).expect("json");
+    assert_eq!(v["cases"], "touch");
+    let polish = &v["polish"];
+    assert!(polish["cost"].as_f64().expect("cost") <= polish["start_cost"].as_f64().expect("start"));
+    assert_eq!(v["cost"], polish["cost"]);
+    let out = dir.path().join("fit.json");
+    let o = run(&[
+        "calibrate",
+        "--object",
+        "A",
+        "--model",
+        "shear",
+        "--method",
+        "stiffness-fit",
+        "--out",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).expect("read")).expect("json");
+    assert_eq!(v["method"], "stiffness-fit");
+    assert!(v["params"]["c12"].as_f64().is_some());
+    let o = run(&[
+        "calibrate",
+        "--object",
+        "A",
+        "--model",
+        "axis",
+        "--cases",
+        "touch",
+        "--out",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success() && stderr(&o).contains("no shear stiffness"), "{}", stderr(&o));
+}

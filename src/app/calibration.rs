@@ -2,7 +2,7 @@
 //! ends with the result, cancelled within one generation.
 
 use super::worker::{Slot, StartError};
-use crate::calibrate::{CalibrationResult, GeneSpace, GenerationStats, Problem, Settings, calibrate};
+use crate::calibrate::{CalibrationResult, CaseSet, GeneSpace, GenerationStats, Problem, Settings, calibrate};
 use crate::grid::Grid;
 use crate::material::Material;
 use crate::msm::Topology;
@@ -16,19 +16,27 @@ pub enum Progress {
     Done(Result<Box<CalibrationResult>, String>),
 }
 
-/// Starts calibrating `material`'s `topology` with `settings` in `slot` (refused while one runs);
-/// `wake` repaints the UI after each message.
-pub fn start(
-    slot: &mut Slot<Progress>,
-    material: Material,
-    topology: Topology,
-    settings: Settings,
-    wake: impl Fn() + Send + Sync + 'static,
-) -> Result<(), StartError> {
+/// What to calibrate.
+#[derive(Debug, Clone)]
+pub struct Job {
+    /// The material.
+    pub material: Material,
+    /// The lattice.
+    pub topology: Topology,
+    /// The training cases.
+    pub cases: CaseSet,
+    /// Search settings.
+    pub settings: Settings,
+}
+
+/// Starts `job` in `slot` (refused while one runs); `wake` repaints the UI after each message.
+pub fn start(slot: &mut Slot<Progress>, job: Job, wake: impl Fn() + Send + Sync + 'static) -> Result<(), StartError> {
+    let Job { material, topology, cases, settings } = job;
     slot.start("calibration", wake, move |ctx| {
         let grid = Grid::paper();
         let space = GeneSpace::new(&material, &grid, topology);
-        let result = Problem::new(material, grid, topology).map_err(|e| e.to_string()).and_then(|problem| {
+        let problem = Problem::new(material, grid, topology).and_then(|p| p.with_cases(cases));
+        let result = problem.map_err(|e| e.to_string()).and_then(|problem| {
             calibrate(&problem, &space, &settings, ctx.cancel_flag(), &mut |s| {
                 ctx.send(Progress::Generation(s.clone()));
             })

@@ -11,6 +11,7 @@ use crate::render::gpu::LineVertex;
 use crate::render::mesh::SurfaceMesh;
 use crate::render::{fixed_outline, lattice_edges, normalise, push_edges};
 use crate::scene::ColourMode;
+use crate::sim::Tool;
 
 /// What the overlays show.
 #[derive(Debug, Clone, Copy)]
@@ -23,7 +24,16 @@ pub struct Show {
     pub nodes: bool,
     /// Fixed-face outline.
     pub fixed: bool,
+    /// The tool held: the probe sphere, or the dragged node's handle and force arrow.
+    pub tool: Tool,
+    /// The tissue's force on the tool, newtons.
+    pub tool_force: [f64; 3],
 }
+
+/// Length of the drag force arrow per newton, metres.
+pub const ARROW_M_PER_N: f32 = 0.02;
+/// Line segments of each of the probe sphere's three circles.
+const CIRCLE_SEGMENTS: usize = 48;
 
 /// The overlay buffers.
 pub struct Overlay {
@@ -110,6 +120,54 @@ impl Overlay {
         }
         if show.springs {
             push_edges(&self.edges, positions, [0.9, 0.9, 0.9, 0.35], |_, _| true, &mut self.lines);
+        }
+        self.push_tool(show, positions);
+    }
+
+    fn push_line(&mut self, a: Vec3, b: Vec3, colour: [f32; 4]) {
+        if self.lines.len() + 2 <= self.lines.capacity() {
+            self.lines.push(LineVertex { position: a.to_array(), colour });
+            self.lines.push(LineVertex { position: b.to_array(), colour });
+        }
+    }
+
+    /// The probe as three great circles; the dragged node as a small cube-corner handle, a line
+    /// to the mouse's target and an arrow of the force on the tissue ([`ARROW_M_PER_N`]).
+    fn push_tool(&mut self, show: Show, positions: &[[f32; 3]]) {
+        match show.tool {
+            Tool::None => {}
+            Tool::Probe { centre, radius } => {
+                let c = Vec3::from(centre.map(|v| v as f32));
+                let r = radius as f32;
+                let axes = [(Vec3::X, Vec3::Y), (Vec3::X, Vec3::Z), (Vec3::Y, Vec3::Z)];
+                for (u, v) in axes {
+                    for i in 0..CIRCLE_SEGMENTS {
+                        let t = |k: usize| k as f32 / CIRCLE_SEGMENTS as f32 * std::f32::consts::TAU;
+                        let p = |k: usize| c + r * (u * t(k).cos() + v * t(k).sin());
+                        self.push_line(p(i), p(i + 1), [0.95, 0.95, 1.0, 0.9]);
+                    }
+                }
+            }
+            Tool::Drag { node, target } => {
+                let Some(p) = positions.get(node).map(|p| Vec3::from(*p)) else { return };
+                let handle = [1.0, 0.55, 0.1, 1.0];
+                for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+                    self.push_line(p - 0.003 * axis, p + 0.003 * axis, handle);
+                }
+                let t = Vec3::from(target.map(|v| v as f32));
+                self.push_line(p, t, [0.7, 0.7, 0.7, 0.6]);
+                // The force the tool puts on the tissue is minus the tissue's force on the tool.
+                let f = -Vec3::from(show.tool_force.map(|v| v as f32));
+                if f.length() > 1e-6 {
+                    let tip = p + f * ARROW_M_PER_N;
+                    let arrow = [1.0, 0.3, 0.3, 1.0];
+                    self.push_line(p, tip, arrow);
+                    let back = (p - tip).normalize() * (0.25 * (tip - p).length()).min(0.008);
+                    let side = back.any_orthonormal_vector() * back.length() * 0.5;
+                    self.push_line(tip, tip + back + side, arrow);
+                    self.push_line(tip, tip + back - side, arrow);
+                }
+            }
         }
     }
 }

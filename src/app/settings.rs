@@ -2,12 +2,14 @@
 //! ([`ViewSettings`]) and the model-side state it displays ([`Shown`]), changed only by
 //! [`super::state::ViewerState::handle`].
 
-use crate::calibrate::{GenerationStats, Method};
+use crate::calibrate::{CaseSet, GenerationStats, Method};
 use crate::cases::LoadCase;
+use crate::fem::dynamics::Formulation;
 use crate::material::Material;
 use crate::msm::{MsmParams, Topology};
 use crate::scene::ColourMode;
 use crate::sim::Integrator;
+use crate::sim::ModelChoice;
 
 /// What the left mouse button does on the 3D view.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -51,6 +53,8 @@ pub struct ViewSettings {
     pub calib_generations: usize,
     /// Calibration population.
     pub calib_population: usize,
+    /// Training cases of the calibration.
+    pub calib_cases: CaseSet,
 }
 
 impl Default for ViewSettings {
@@ -70,6 +74,7 @@ impl Default for ViewSettings {
             calib_seed: 1,
             calib_generations: 100,
             calib_population: 50,
+            calib_cases: CaseSet::Touch,
         }
     }
 }
@@ -101,11 +106,27 @@ pub struct Shown {
     pub note: Option<String>,
     /// Probe force against depth (mm, N).
     pub force_depth: Vec<[f64; 2]>,
+    /// The FEM runs instead of the lattice of `params` (kept for switching back).
+    pub fem: Option<Formulation>,
+    /// The running model's touch-benchmark scores (validation set), once computed, or why not.
+    pub validation: Option<Result<crate::tissue::RecordedScores, String>>,
+    /// The tool held now (drawn over the tissue).
+    pub tool: crate::sim::Tool,
+    /// The FEM's probe force (N) for a sphere position (centre), solved on request.
+    pub fem_probe: Option<([f64; 3], f64)>,
 }
 
 impl Shown {
     /// The lattice of the running parameters.
     pub fn topology(&self) -> Topology {
         self.params.topology()
+    }
+
+    /// The running model.
+    pub fn model(&self) -> ModelChoice {
+        match self.fem {
+            Some(f) => ModelChoice::Fem(f),
+            None => ModelChoice::Lattice(self.topology()),
+        }
     }
 }

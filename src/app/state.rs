@@ -20,7 +20,7 @@ use crate::fem::FemModel;
 use crate::grid::Grid;
 use crate::material::Material;
 use crate::msm::{MsmParams, Topology};
-use crate::sim::{Integrator, MsmTissue, Tissue, Tool};
+use crate::sim::{Integrator, ModelChoice, Tool};
 use crate::tissue::tissue_params;
 
 /// What the user asked for.
@@ -30,6 +30,10 @@ pub enum Request {
     LoadObject,
     /// Another lattice: its shipped calibration (or the material's scale).
     SelectTopology(Topology),
+    /// The FEM in place of the lattice.
+    SelectFem(crate::fem::dynamics::Formulation),
+    /// Solve the FEM's force for the probe's current position (in the background).
+    FemProbeForce,
     /// Edited parameters.
     EditParams(MsmParams),
     /// Integrator asked for (`None`: automatic) and time step, s.
@@ -63,6 +67,10 @@ pub struct ViewerState {
     grid: Grid,
     fem: Slot<Result<Vec<[f64; 3]>, String>>,
     calibration: Slot<Progress>,
+    validation: Slot<Result<crate::tissue::RecordedScores, String>>,
+    /// The model changed while a validation ran: score it again when that one ends.
+    validation_stale: bool,
+    fem_probe: Slot<Result<([f64; 3], f64), String>>,
     wake: Arc<dyn Fn() + Send + Sync>,
 }
 
@@ -73,20 +81,18 @@ pub fn bottom_clamp(grid: &Grid) -> LoadCase {
     c
 }
 
-/// The recipe of a mass-spring tissue for the physics thread.
-fn msm_recipe(params: MsmParams, density: f64) -> super::physics::TissueRecipe {
-    Box::new(move || {
-        MsmTissue::build(params, density).map(|t| Box::new(t) as Box<dyn Tissue>).map_err(|e| e.to_string())
-    })
+/// The recipe of the running model for the physics thread: the lattice with `params`, or the FEM.
+fn recipe(model: ModelChoice, material: Material, params: MsmParams) -> super::physics::TissueRecipe {
+    Box::new(move || model.build(&material, Some(params)).map_err(|e| format!("{e:#}")))
 }
 
 impl ViewerState {
-    /// Object A with its default tissue (the shear lattice), and the simulation to start with;
+    /// Object A with its default tissue ([`crate::tissue::DEFAULT_TOPOLOGY`]), and the simulation to start with;
     /// `wake` repaints the UI from background threads.
     pub fn new(wake: impl Fn() + Send + Sync + 'static) -> anyhow::Result<(Self, Replacement)> {
         let grid = Grid::paper();
         let material = Material::object_a();
-        let params = tissue_params(&material, Topology::Shear)?;
+        let params = crate::tissue::default_params(&material)?;
         let dt = 1e-4;
         let state = Self {
             settings: ViewSettings::default(),
@@ -103,12 +109,21 @@ impl ViewerState {
                 calib_generations: 0,
                 note: None,
                 force_depth: Vec::new(),
+                fem: None,
+                validation: None,
+                tool: Tool::None,
+                fem_probe: None,
             },
             grid,
             fem: Slot::default(),
             calibration: Slot::default(),
+            validation: Slot::default(),
+            validation_stale: false,
+            fem_probe: Slot::default(),
             wake: Arc::new(wake),
         };
+        let mut state = state;
+        state.start_validation();
         let first = state.replacement();
         Ok((state, first))
     }
@@ -120,7 +135,7 @@ impl ViewerState {
 
     fn replacement(&self) -> Replacement {
         Replacement {
-            recipe: msm_recipe(self.shown.params, self.shown.material.density),
+            recipe: recipe(self.shown.model(), self.shown.material.clone(), self.shown.params),
             integrator: self.shown.integrator,
             dt: self.shown.dt,
             case: self.shown.case_active.clone().unwrap_or_else(|| bottom_clamp(&self.grid)),
@@ -131,11 +146,25 @@ impl ViewerState {
     pub fn handle(&mut self, request: Request, send: &mut dyn FnMut(Command)) {
         match request {
             Request::LoadObject => self.load_object(self.shown.topology(), send),
-            Request::SelectTopology(t) => self.load_object(t, send),
+            Request::SelectTopology(t) => {
+                self.shown.fem = None;
+                self.load_object(t, send);
+            }
+            Request::SelectFem(f) => {
+                self.shown.fem = Some(f);
+                self.start_validation();
+                send(Command::Replace(self.replacement()));
+            }
+            Request::FemProbeForce => self.start_fem_probe(),
             Request::EditParams(p) => {
                 let p = p.with_ties(self.shown.material.is_transversely_isotropic());
                 self.shown.params = p;
-                send(Command::SetParams(p));
+                if self.shown.fem.take().is_some() {
+                    send(Command::Replace(self.replacement()));
+                } else {
+                    send(Command::SetParams(p));
+                }
+                self.start_validation();
             }
             Request::SetIntegrator(i, dt) => {
                 (self.shown.integrator, self.shown.dt) = (i, dt);
@@ -158,7 +187,10 @@ impl ViewerState {
                     self.handle(Request::EditParams(p), send);
                 }
             }
-            Request::Tool(t) => send(Command::SetTool(t)),
+            Request::Tool(t) => {
+                self.shown.tool = t;
+                send(Command::SetTool(t));
+            }
             Request::ProbeStarted => self.shown.force_depth.clear(),
             Request::ForceSample(s) => {
                 if self.shown.force_depth.last().is_none_or(|l| (l[0] - s[0]).abs() > 0.05) {
@@ -198,7 +230,70 @@ impl ViewerState {
         self.shown.params = params;
         self.shown.case_active = None;
         self.shown.fem_answer = None;
+        self.shown.fem_probe = None;
+        self.start_validation();
         send(Command::Replace(self.replacement()));
+    }
+
+    /// Scores the running model on the touch benchmark in the background (again when it ends,
+    /// if the model changes meanwhile).
+    fn start_validation(&mut self) {
+        if self.validation.busy() {
+            self.validation_stale = true;
+            return;
+        }
+        self.validation_stale = false;
+        self.shown.validation = None;
+        let (material, grid) = (self.shown.material.clone(), self.grid);
+        let model = match self.shown.model() {
+            ModelChoice::Fem(f) => crate::touch::ModelUnderTest::Fem(f),
+            ModelChoice::Lattice(_) => crate::touch::ModelUnderTest::Lattice(self.shown.params),
+        };
+        let wake = Arc::clone(&self.wake);
+        let started = self.validation.start(
+            "touch validation",
+            move || wake(),
+            move |ctx| {
+                let r = crate::touch::Reference::new(&material, grid)
+                    .and_then(|reference| crate::touch::score::evaluate(&reference, &material, &model))
+                    .map(|r| crate::tissue::RecordedScores {
+                        worst_force_error: r.worst_force_error,
+                        median_force_error: r.median_force_error,
+                        worst_frequency_error: r.worst_frequency_error,
+                    })
+                    .map_err(|e| format!("{e:#}"));
+                ctx.send(r);
+            },
+        );
+        if let Err(e) = started {
+            self.shown.validation = Some(Err(e.to_string()));
+        }
+    }
+
+    /// The FEM's force on the probe sphere where it is now (node contact, small displacements).
+    fn start_fem_probe(&mut self) {
+        let Tool::Probe { centre, radius } = self.shown.tool else {
+            self.shown.note = Some("press the probe into the cube first".into());
+            return;
+        };
+        let (material, grid) = (self.shown.material.clone(), self.grid);
+        let wake = Arc::clone(&self.wake);
+        let started = self.fem_probe.start(
+            "FEM probe force",
+            move || wake(),
+            move |ctx| {
+                let fem = FemModel::new(grid, &material);
+                let k = crate::touch::linear::GroupedStiffness::fem(&fem);
+                let r = crate::touch::score::Responder::new(grid, k, &[1.0])
+                    .and_then(|mut r| r.solver.probe(&grid, centre, radius))
+                    .map(|a| (centre, a.force.iter().map(|f| f * f).sum::<f64>().sqrt()))
+                    .map_err(|e| e.to_string());
+                ctx.send(r);
+            },
+        );
+        if let Err(e) = started {
+            self.shown.note = Some(e.to_string());
+        }
     }
 
     fn apply_case(&mut self, send: &mut dyn FnMut(Command)) {
@@ -241,7 +336,9 @@ impl ViewerState {
         };
         let wake = Arc::clone(&self.wake);
         let material = self.shown.material.clone();
-        match calibration::start(&mut self.calibration, material, self.shown.topology(), settings, move || wake()) {
+        let job =
+            calibration::Job { material, topology: self.shown.topology(), cases: self.settings.calib_cases, settings };
+        match calibration::start(&mut self.calibration, job, move || wake()) {
             Ok(()) => {
                 self.shown.history.clear();
                 self.shown.result = None;
@@ -285,11 +382,24 @@ impl ViewerState {
         if let Some(State::Stopped(why)) = ended {
             self.shown.note = Some(format!("the FEM solve stopped unexpectedly ({why})"));
         }
+        let shown = &mut self.shown;
+        let ended = self.validation.poll(|r| shown.validation = Some(r));
+        if let Some(State::Stopped(why)) = ended {
+            self.shown.validation = Some(Err(format!("stopped unexpectedly ({why})")));
+        }
+        if self.validation_stale && !self.validation.busy() {
+            self.start_validation();
+        }
+        let shown = &mut self.shown;
+        self.fem_probe.poll(|r| match r {
+            Ok(v) => shown.fem_probe = Some(v),
+            Err(e) => shown.note = Some(format!("FEM probe force failed: {e}")),
+        });
     }
 
     /// Whether a background job runs (the UI then redraws as its messages arrive).
     pub fn busy(&self) -> bool {
-        self.fem.busy() || self.calibration.busy()
+        self.fem.busy() || self.calibration.busy() || self.validation.busy() || self.fem_probe.busy()
     }
 }
 
@@ -320,7 +430,7 @@ mod tests {
     fn applying_a_calibration_changes_topology_and_keeps_the_integrator_guard() {
         let (mut state, physics) = started();
         let mut send = |c| physics.send(c).expect("physics runs");
-        assert_eq!(state.shown.topology(), Topology::Shear);
+        assert_eq!(state.shown.topology(), crate::tissue::DEFAULT_TOPOLOGY);
         // A result of another lattice (the paper's axis springs), applied as the panel would.
         let axis = tissue_params(&state.shown.material, Topology::Axis).expect("shipped");
         state.shown.result = Some(axis);

@@ -192,7 +192,14 @@ impl App {
             self.latest.fixed.resize(n, false);
         }
         let s = &self.state.settings;
-        let show = Show { colour: s.colour, springs: s.show_springs, nodes: s.show_nodes, fixed: s.show_fixed };
+        let show = Show {
+            colour: s.colour,
+            springs: s.show_springs,
+            nodes: s.show_nodes,
+            fixed: s.show_fixed,
+            tool: self.state.shown.tool,
+            tool_force: self.latest.tool_force,
+        };
         let fem = self.state.shown.fem_answer.as_deref();
         self.overlay.update(show, &self.latest.positions, &self.latest.fixed, fem, &mut self.mesh);
         let Some(surface) = self.surface.as_mut() else { return Ok(()) };

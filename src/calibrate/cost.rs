@@ -31,6 +31,12 @@ pub enum CostError {
     /// A sparse factorisation failed.
     #[error(transparent)]
     Sparse(#[from] SparseError),
+    /// The touch cases cannot be used.
+    #[error("touch cases: {0}")]
+    Touch(String),
+    /// The local polish failed.
+    #[error("polish: {0}")]
+    Polish(String),
 }
 
 /// The clamped benchmark of one object: FEM references and what the cost needs of them.
@@ -49,6 +55,13 @@ pub struct Problem {
     /// Per case: FEM displacement along the loaded axis, squared transverse displacement, and the
     /// node's lattice index along the loaded axis (closed-form cost of the axis model).
     axial: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)>,
+    /// The training cases the static objective uses.
+    pub case_set: super::CaseSet,
+    /// The touch benchmark's FEM answers, when the objective uses them.
+    pub touch: Option<std::sync::Arc<crate::touch::Reference>>,
+    /// The paper cost of a zero displacement (the sum of the FEM's nodal displacement norms),
+    /// metres: the scale that makes the paper's cost relative in the combined objective.
+    paper_scale: f64,
 }
 
 /// A case's answer without support reactions (the cost does not need them).
@@ -60,6 +73,12 @@ fn unreacted(case: &LoadCase, displacements: Vec<[f64; 3]>) -> CaseSolution {
         displacements,
         reaction_n: [0.0; 3],
     }
+}
+
+/// The lattice of `topology` on `grid` with every stiffness group at 1 N/m: its springs' `k` are
+/// the unit shares of each group.
+fn unit_lattice(grid: Grid, topology: Topology) -> Result<MsmModel, ParamError> {
+    MsmModel::new(grid, MsmParams::unit(topology), 1.0)
 }
 
 /// The tangent pattern kept in `slot` for `case`'s reduction, built on first use.
@@ -80,6 +99,7 @@ fn tangent_for<'w>(
 pub struct Workspace {
     tangents: [Option<TangentAssembler>; 3],
     transient: [Option<TangentAssembler>; 3],
+    touch: Option<crate::touch::score::Responder>,
 }
 
 impl Problem {
@@ -98,7 +118,19 @@ impl Problem {
                 (ua, perp, idx)
             })
             .collect();
-        Ok(Self { material, grid, topology, cases, fem, axial })
+        let paper_scale =
+            fem.iter().flat_map(|f| &f.displacements).map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()).sum();
+        Ok(Self {
+            material,
+            grid,
+            topology,
+            cases,
+            fem,
+            axial,
+            case_set: super::CaseSet::Paper,
+            touch: None,
+            paper_scale,
+        })
     }
 
     /// The MSM of `params` on this grid with this material's density.
@@ -117,7 +149,7 @@ impl Problem {
     /// The cost of `params` in `mode`, metres.
     pub fn cost_in(&self, mode: super::CostMode, params: &MsmParams, ws: &mut Workspace) -> Result<f64, CostError> {
         match mode {
-            super::CostMode::Static => self.cost(params, ws),
+            super::CostMode::Static => self.objective(params, ws),
             super::CostMode::Transient => {
                 let solutions = self.transient_solutions(params, ws)?;
                 Ok(crate::accuracy::cost(&solutions, &self.fem))
@@ -138,6 +170,38 @@ impl Problem {
         Ok(out)
     }
 
+    /// This problem using `set` as its training cases (the touch benchmark's FEM answers are
+    /// computed here when it needs them).
+    pub fn with_cases(mut self, set: super::CaseSet) -> Result<Self, CostError> {
+        if set != super::CaseSet::Paper {
+            if self.topology == Topology::Axis {
+                return Err(CostError::Touch(
+                    "the axis-spring lattice has no shear stiffness at rest, so the touch cases cannot train it".into(),
+                ));
+            }
+            let reference = crate::touch::Reference::new(&self.material, self.grid)
+                .map_err(|e| CostError::Touch(format!("{e:#}")))?;
+            self.touch = Some(std::sync::Arc::new(reference));
+        }
+        self.case_set = set;
+        Ok(self)
+    }
+
+    /// The static objective over the training cases of [`Problem::case_set`]: the paper's cost
+    /// (metres), the touch cost (dimensionless, [`crate::touch::fit`]), or for both the touch
+    /// cost plus the paper's cost relative to [`Problem::paper_scale`].
+    pub fn objective(&self, params: &MsmParams, ws: &mut Workspace) -> Result<f64, CostError> {
+        match self.case_set {
+            super::CaseSet::Paper => self.cost(params, ws),
+            super::CaseSet::Touch | super::CaseSet::Both => Ok(self.objective_gradient(params, ws)?.0),
+        }
+    }
+
+    /// The paper cost of zero displacements, metres (the combined objective's scale).
+    pub fn paper_scale(&self) -> f64 {
+        self.paper_scale
+    }
+
     /// The paper's cost (eq. 1) of `params` with static equilibria, metres.
     pub fn cost(&self, params: &MsmParams, ws: &mut Workspace) -> Result<f64, CostError> {
         params.validate()?;
@@ -147,6 +211,76 @@ impl Problem {
         }
         let solutions = self.static_solutions(params, ws)?;
         Ok(crate::accuracy::cost(&solutions, &self.fem))
+    }
+
+    /// The paper's cost of a shear or hex lattice and its exact gradient by each stiffness group
+    /// ([`crate::touch::linear::GROUP_NAMES`]), by the adjoint of the nonlinear equilibrium: with
+    /// `K_t` the tangent at the equilibrium and `g = dC/du`, `dC/dtheta_g = (K_t^-1 g) . phi_g`,
+    /// `phi_g` the spring forces of group `g` at unit stiffness. One extra solve per case.
+    pub fn paper_gradient(&self, params: &MsmParams, ws: &mut Workspace) -> Result<(f64, [f64; 7]), CostError> {
+        params.validate()?;
+        let model = self.model(params)?;
+        let solutions = self.static_solutions(params, ws)?;
+        let unit = unit_lattice(self.grid, self.topology)?;
+        let grid = self.grid;
+        let nn = grid.num_nodes();
+        let (mut cost, mut grad) = (0.0, [0.0; 7]);
+        for ((case, sol), fem) in self.cases.iter().zip(&solutions).zip(&self.fem) {
+            let fixed = case.fixed_nodes();
+            let x: [Vec<f64>; 3] =
+                std::array::from_fn(|c| (0..nn).map(|p| grid.position(p)[c] + sol.displacements[p][c]).collect());
+            let mut g: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
+            for p in 0..nn {
+                let d: [f64; 3] = std::array::from_fn(|c| sol.displacements[p][c] - fem.displacements[p][c]);
+                let norm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                cost += norm;
+                if norm > 0.0 && !fixed[p] {
+                    for c in 0..3 {
+                        g[c][p] = d[c] / norm;
+                    }
+                }
+            }
+            let tangent = tangent_for(&mut ws.tangents[case.axis - 1], &model, case)?;
+            tangent.assemble(&model, &x, 1.0, 0.0, false, None);
+            tangent.system.factor()?;
+            let mut rhs = vec![0.0; tangent.dofs.n];
+            tangent.dofs.fold(&g, &mut rhs);
+            tangent.system.solve_in_place(&mut rhs)?;
+            let mut mu: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
+            tangent.dofs.expand_add(&rhs, &mut mu);
+            tangent.system.invalidate();
+            for s in unit.springs() {
+                let group = crate::touch::linear::group_of(unit.families[s.family].family);
+                let d: [f64; 3] = std::array::from_fn(|c| x[c][s.b] - x[c][s.a]);
+                let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                let coef = s.k * (l - s.rest) / l;
+                grad[group] += coef * (0..3).map(|c| d[c] * (mu[c][s.a] - mu[c][s.b])).sum::<f64>();
+            }
+        }
+        Ok((cost, grad))
+    }
+
+    /// The static objective ([`Problem::objective`]) and its gradient by each stiffness group.
+    pub fn objective_gradient(&self, params: &MsmParams, ws: &mut Workspace) -> Result<(f64, [f64; 7]), CostError> {
+        let touch = |ws: &mut Workspace| -> Result<(f64, [f64; 7]), CostError> {
+            params.validate()?;
+            let reference = self.touch.as_deref().ok_or_else(|| CostError::Touch("no touch reference".into()))?;
+            let responder = match &mut ws.touch {
+                Some(r) => r,
+                empty => empty.insert(crate::touch::fit::lattice_responder(reference, self.topology)?),
+            };
+            let theta = crate::touch::linear::group_values(params);
+            Ok(crate::touch::fit::touch_cost(reference, crate::touch::Set::Training, responder, &theta)?)
+        };
+        match self.case_set {
+            super::CaseSet::Paper => self.paper_gradient(params, ws),
+            super::CaseSet::Touch => touch(ws),
+            super::CaseSet::Both => {
+                let (t, tg) = touch(ws)?;
+                let (p, pg) = self.paper_gradient(params, ws)?;
+                Ok((t + p / self.paper_scale, std::array::from_fn(|g| tg[g] + pg[g] / self.paper_scale)))
+            }
+        }
     }
 
     /// Static MSM answers of the 9 cases (closed form or warm-started symmetric Newton).
@@ -221,5 +355,39 @@ impl Problem {
             }
         }
         (k, total)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_gradient_matches_finite_differences() {
+        let m = Material::object_a();
+        let problem = Problem::new(m, Grid::new(4).unwrap(), Topology::Hex).unwrap();
+        let params = MsmParams {
+            c12: Some(300.0),
+            c13: Some(250.0),
+            c23: Some(200.0),
+            b: Some(150.0),
+            ..MsmParams::axis(900.0, 800.0, 700.0, 0.0)
+        };
+        let mut ws = Workspace::default();
+        let (c, g) = problem.paper_gradient(&params, &mut ws).unwrap();
+        assert!((c - problem.cost(&params, &mut ws).unwrap()).abs() <= 1e-12 * c);
+        let theta = crate::touch::linear::group_values(&params);
+        let scale = g.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for i in 0..7 {
+            let h = 1e-5 * theta[i];
+            let at = |t: f64| {
+                let mut th = theta;
+                th[i] = t;
+                let p = crate::touch::linear::with_group_values(&params, &th);
+                problem.cost(&p, &mut Workspace::default()).unwrap()
+            };
+            let fd = (at(theta[i] + h) - at(theta[i] - h)) / (2.0 * h);
+            assert!((fd - g[i]).abs() <= 1e-4 * scale, "{i}: {fd} vs {}", g[i]);
+        }
     }
 }

@@ -15,6 +15,7 @@
 pub mod cost;
 pub mod damping;
 pub mod genes;
+pub mod polish;
 pub mod search;
 pub mod transient;
 
@@ -30,6 +31,10 @@ use crate::msm::{MsmParams, Topology};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
+    /// The load-free baseline: the non-negative least-squares fit of the lattice's stiffness
+    /// matrix to the FEM's ([`crate::touch::fit::stiffness_fit`]); no search, no load case.
+    #[serde(rename = "stiffness-fit")]
+    StiffnessFit,
     /// GA with Metropolis screening of crossover (XSA) and mutation (MSA): the paper's method.
     Hybrid,
     /// Plain GA, same operators and settings, no screening.
@@ -46,6 +51,54 @@ pub enum CostMode {
     Static,
     /// The state a fixed time after a step load from rest (see [`transient`]); identifies `d`.
     Transient,
+}
+
+impl Method {
+    /// The name used on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::StiffnessFit => "stiffness-fit",
+            Method::Hybrid => "hybrid",
+            Method::Ga => "ga",
+            Method::Sa => "sa",
+        }
+    }
+}
+
+/// The training cases of the static cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CaseSet {
+    /// The paper's nine clamped face loads (eq. 1), the default.
+    Paper,
+    /// The touch benchmark's training cases ([`crate::touch`]).
+    Touch,
+    /// Both: the touch cost plus the paper's cost relative to the FEM's displacements.
+    Both,
+}
+
+impl CaseSet {
+    /// The lower-case name used on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            CaseSet::Paper => "paper",
+            CaseSet::Touch => "touch",
+            CaseSet::Both => "both",
+        }
+    }
+}
+
+/// The gradient polish after the search ([`polish`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PolishReport {
+    /// Objective at the search's best.
+    pub start_cost: f64,
+    /// Objective after the polish.
+    pub cost: f64,
+    /// L-BFGS iterations.
+    pub iterations: u64,
+    /// Genes that the polish moved outside the search box (the box did not hold the optimum).
+    pub left_box: Vec<String>,
 }
 
 /// Largest `population x generations` of one run (the paper's is 5000).
@@ -178,6 +231,59 @@ pub struct CalibrationResult {
     pub nodes_per_axis: usize,
     /// True when cancelled before the last generation (the best so far is reported).
     pub cancelled: bool,
+    /// The training cases of the cost.
+    pub cases: CaseSet,
+    /// The gradient polish after the search, where one ran (static cost, shear and hex lattices).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub polish: Option<PolishReport>,
+}
+
+/// The search of `settings.method`, then (static cost, shear and hex lattices) the polish.
+fn search_and_polish(
+    problem: &Problem,
+    space: &GeneSpace,
+    settings: &Settings,
+    cancel: &AtomicBool,
+    on_generation: &mut dyn FnMut(&GenerationStats),
+) -> Result<(MsmParams, search::SearchOutcome, Option<PolishReport>), CalibrationError> {
+    let mut outcome = if settings.method == Method::Sa {
+        search::annealing(problem, space, settings, cancel, on_generation)
+    } else {
+        search::genetic(problem, space, settings, cancel, on_generation)
+    };
+    let mut params = space.params(&outcome.best);
+    let mut polish = None;
+    if problem.topology != Topology::Axis && settings.cost == CostMode::Static && !outcome.cancelled {
+        let ti = problem.material.is_transversely_isotropic();
+        let mut ws = Workspace::default();
+        let mut objective = |p: &MsmParams| problem.objective_gradient(p, &mut ws).map_err(|e| e.to_string());
+        let p = polish::polish(&params, ti, &mut objective).map_err(CostError::Polish)?;
+        if p.cost < outcome.best_cost {
+            params = p.params;
+            outcome.best_cost = p.cost;
+        }
+        polish = Some(PolishReport {
+            start_cost: p.start_cost,
+            cost: p.cost,
+            iterations: p.iterations,
+            left_box: left_box(space, &params),
+        });
+    }
+    Ok((params, outcome, polish))
+}
+
+/// The stiffness genes of `params` that lie outside `space`'s box (`d` is not a stiffness).
+fn left_box(space: &GeneSpace, params: &MsmParams) -> Vec<String> {
+    let theta = crate::touch::linear::group_values(params);
+    space
+        .names
+        .iter()
+        .zip(space.lo.iter().zip(&space.hi))
+        .filter_map(|(name, (&lo, &hi))| {
+            let g = crate::touch::linear::GROUP_NAMES.iter().position(|n| n == name)?;
+            (theta[g] < lo || theta[g] > hi).then(|| name.clone())
+        })
+        .collect()
 }
 
 /// Errors of a calibration.
@@ -202,11 +308,23 @@ pub fn calibrate(
 ) -> Result<CalibrationResult, CalibrationError> {
     settings.validate().map_err(CalibrationError::Settings)?;
     let start = Instant::now();
-    let outcome = match settings.method {
-        Method::Hybrid | Method::Ga => search::genetic(problem, space, settings, cancel, on_generation),
-        Method::Sa => search::annealing(problem, space, settings, cancel, on_generation),
+    let (mut params, outcome, polish) = match settings.method {
+        Method::StiffnessFit => {
+            let fem = crate::fem::FemModel::new(problem.grid, &problem.material);
+            let ti = problem.material.is_transversely_isotropic();
+            let (params, _) = crate::touch::fit::stiffness_fit(&fem, problem.topology, ti);
+            let cost = problem.objective(&params, &mut Workspace::default())?;
+            let outcome = search::SearchOutcome {
+                best: Vec::new(),
+                best_cost: cost,
+                history: Vec::new(),
+                evaluations: 1,
+                cancelled: false,
+            };
+            (params, outcome, None)
+        }
+        Method::Hybrid | Method::Ga | Method::Sa => search_and_polish(problem, space, settings, cancel, on_generation)?,
     };
-    let mut params = space.params(&outcome.best);
     let (d_crit, omega) = damping::critical_damping(&problem.model(&params).map_err(CostError::from)?)?;
     let d_identified = settings.cost == CostMode::Transient;
     let d_note = if d_identified {
@@ -242,5 +360,7 @@ pub fn calibrate(
         settings: settings.clone(),
         nodes_per_axis: problem.grid.n(),
         cancelled: outcome.cancelled,
+        cases: problem.case_set,
+        polish,
     })
 }

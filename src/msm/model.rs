@@ -76,6 +76,17 @@ impl MsmParams {
         Self { k1, k2, k3, d, c12: None, c13: None, c23: None, b: None }
     }
 
+    /// Every stiffness of `topology` at 1 N/m, no damping.
+    pub fn unit(topology: Topology) -> Self {
+        let one = Some(1.0);
+        let axis = Self::axis(1.0, 1.0, 1.0, 0.0);
+        match topology {
+            Topology::Axis => axis,
+            Topology::Shear => Self { c12: one, c13: one, c23: one, ..axis },
+            Topology::Hex => Self { c12: one, c13: one, c23: one, b: one, ..axis },
+        }
+    }
+
     /// The topology these parameters describe: hex when a body-diagonal stiffness is set, shear
     /// when any face-diagonal stiffness is, axis otherwise.
     pub fn topology(&self) -> Topology {

@@ -4,9 +4,81 @@
 //! types and no threads: the viewer's physics thread and the headless `simulate` command both
 //! drive this.
 
+pub mod fem_tissue;
 pub mod tissue;
 
+pub use fem_tissue::FemTissue;
 pub use tissue::{MsmTissue, Tissue, explicit_dt_limit};
+
+use crate::fem::dynamics::Formulation;
+use crate::material::Material;
+use crate::msm::Topology;
+
+/// Which model runs: a spring lattice with the shipped tissue of its topology, or the hex8 FEM.
+/// Written `axis`, `shear`, `hex`, `fem-linear` or `fem-corotational` (scripts, the command line).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub enum ModelChoice {
+    /// A spring lattice.
+    Lattice(Topology),
+    /// The FEM cube.
+    Fem(Formulation),
+}
+
+impl ModelChoice {
+    /// Every model, lattices first.
+    pub const ALL: [ModelChoice; 5] = [
+        ModelChoice::Lattice(Topology::Hex),
+        ModelChoice::Lattice(Topology::Shear),
+        ModelChoice::Lattice(Topology::Axis),
+        ModelChoice::Fem(Formulation::Linear),
+        ModelChoice::Fem(Formulation::Corotational),
+    ];
+
+    /// Its name.
+    pub fn name(self) -> String {
+        match self {
+            ModelChoice::Lattice(t) => t.name().to_owned(),
+            ModelChoice::Fem(f) => format!("fem-{}", f.name()),
+        }
+    }
+
+    /// The running tissue of `material` at rest on the paper's grid: a lattice with `params`
+    /// (the shipped tissue where `None`), or the FEM damped like the shipped default tissue
+    /// (its nodal `d` as a mass-proportional rate).
+    pub fn build(self, material: &Material, params: Option<MsmParams>) -> anyhow::Result<Box<dyn Tissue>> {
+        let grid = crate::grid::Grid::paper();
+        Ok(match self {
+            ModelChoice::Lattice(t) => {
+                let p = match params {
+                    Some(p) => p,
+                    None => crate::tissue::tissue_params(material, t)?,
+                };
+                Box::new(MsmTissue::new(MsmModel::new(grid, p, material.density)?, material.density))
+            }
+            ModelChoice::Fem(f) => {
+                let d = crate::tissue::default_params(material).map(|p| p.d).unwrap_or(0.0);
+                let node_mass = material.density * crate::grid::CUBE_SIDE_M.powi(3) / grid.num_nodes() as f64;
+                Box::new(FemTissue::new(grid, material, f, d / node_mass))
+            }
+        })
+    }
+}
+
+impl From<ModelChoice> for String {
+    fn from(m: ModelChoice) -> String {
+        m.name()
+    }
+}
+
+impl TryFrom<String> for ModelChoice {
+    type Error = String;
+    fn try_from(s: String) -> Result<Self, String> {
+        ModelChoice::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| {
+            format!("unknown model {s:?}: the models are axis, shear, hex, fem-linear and fem-corotational")
+        })
+    }
+}
 
 use crate::cases::LoadCase;
 use crate::msm::{MsmModel, MsmParams};

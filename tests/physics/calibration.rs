@@ -135,18 +135,25 @@ fn a_result_applies_to_a_running_model() {
 }
 
 #[test]
-fn shipped_hex_lattice_meets_the_richer_model_targets_at_10_newtons() {
+fn hex_lattice_meets_the_richer_model_targets_at_10_newtons() {
     // The target: at 10 N the richer calibrated MSM has at most 1/3 of the paper model's
     // average and 2/3 of its maximum nodal error, on both objects. The paper model here is the
-    // axis lattice at the exact optimum of the same cost (the best it can do).
+    // axis lattice at the exact optimum of the same cost (the best it can do); the hex lattice is
+    // calibrated on the same cases (the load-free stiffness fit, polished on the paper's cost).
     for m in [Material::object_a(), Material::object_b()] {
         let name = m.name.clone();
-        let hex = tissue_sim::tissue::tissue_params(&m, Topology::Hex).expect("shipped hex tissue");
-        assert_eq!(hex.topology(), Topology::Hex);
         let (axis_problem, _) = problem(m.clone());
         let (k, _) = axis_problem.axis_optimum();
-        let hex_problem = Problem::new(m, Grid::paper(), Topology::Hex).expect("FEM references");
+        let hex_problem = Problem::new(m.clone(), Grid::paper(), Topology::Hex).expect("FEM references");
         let mut ws = tissue_sim::calibrate::Workspace::default();
+        let fem = tissue_sim::fem::FemModel::new(Grid::paper(), &m);
+        let (fit, _) = tissue_sim::touch::fit::stiffness_fit(&fem, Topology::Hex, m.is_transversely_isotropic());
+        let mut objective = |p: &tissue_sim::msm::MsmParams| {
+            hex_problem.paper_gradient(p, &mut tissue_sim::calibrate::Workspace::default()).map_err(|e| e.to_string())
+        };
+        let hex = tissue_sim::calibrate::polish::polish(&fit, m.is_transversely_isotropic(), &mut objective)
+            .expect("polish")
+            .params;
         let h = Grid::paper().h();
         let mut errors = |p: &Problem, params| {
             let s = p.static_solutions(&params, &mut ws).expect("static solve");

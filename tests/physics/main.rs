@@ -1,7 +1,8 @@
 //! Whole behaviours of the physics core, one test binary: the FEM against exact answers, the
-//! mass-spring statics, calibration, and stability.
+//! mass-spring statics, calibration, stability, and the touch benchmark.
 
 mod calibration;
 mod fem_reference;
 mod msm_statics;
 mod stability;
+mod touch;

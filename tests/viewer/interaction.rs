@@ -6,7 +6,7 @@ use tissue_sim::sim::Integrator;
 fn script(actions: Vec<Action>) -> Script {
     Script {
         object: "A".into(),
-        model: tissue_sim::msm::Topology::Shear,
+        model: tissue_sim::sim::ModelChoice::Lattice(tissue_sim::msm::Topology::Shear),
         dt: 1e-4,
         integrator: None,
         clamp: "bottom".into(),

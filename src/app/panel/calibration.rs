@@ -1,10 +1,10 @@
 //! Panel section "Calibration (GA+SA)": settings, Calibrate / Cancel / Apply, progress and the
 //! run's curves (best cost; mean and standard deviation of fitness).
 
-use egui_plot::{Line, Plot, PlotPoints};
+use egui_plot::{Line, PlotPoints};
 
 use crate::app::state::{Request, Shown, ViewSettings};
-use crate::calibrate::{GenerationStats, Method};
+use crate::calibrate::{CaseSet, GenerationStats, Method};
 
 /// Draws the section.
 pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, requests: &mut Vec<Request>) {
@@ -12,6 +12,13 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
         ui.selectable_value(&mut settings.calib_method, Method::Hybrid, "hybrid");
         ui.selectable_value(&mut settings.calib_method, Method::Ga, "GA");
         ui.selectable_value(&mut settings.calib_method, Method::Sa, "SA");
+        ui.selectable_value(&mut settings.calib_method, Method::StiffnessFit, "stiffness fit");
+    });
+    ui.horizontal(|ui| {
+        ui.label("training cases");
+        ui.selectable_value(&mut settings.calib_cases, CaseSet::Touch, "touch");
+        ui.selectable_value(&mut settings.calib_cases, CaseSet::Paper, "paper");
+        ui.selectable_value(&mut settings.calib_cases, CaseSet::Both, "both");
     });
     ui.horizontal(|ui| {
         ui.label("seed");
@@ -43,12 +50,16 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
         let pts = |f: &dyn Fn(&GenerationStats) -> f64| -> PlotPoints<'static> {
             PlotPoints::from(shown.history.iter().map(|s| [s.generation as f64, f(s)]).collect::<Vec<_>>())
         };
-        Plot::new("best").height(110.0).x_axis_label("generation").y_axis_label("best cost (m)").show(ui, |p| {
+        let generations = shown.history.last().map_or(1, |s| s.generation).max(shown.calib_generations) as f64;
+        super::fitted_plot(ui, "best", "generation", "best cost").include_x(generations).show(ui, |p| {
             p.line(Line::new("best cost", pts(&|s| s.best_cost)));
         });
-        Plot::new("fitness").height(110.0).x_axis_label("generation").y_axis_label("fitness (1/m)").show(ui, |p| {
-            p.line(Line::new("mean fitness", pts(&|s| s.mean_fitness)));
-            p.line(Line::new("std of fitness", pts(&|s| s.std_fitness)));
-        });
+        super::fitted_plot(ui, "fitness", "generation", "fitness (1 / cost)")
+            .include_x(generations)
+            .include_y(0.0)
+            .show(ui, |p| {
+                p.line(Line::new("mean fitness", pts(&|s| s.mean_fitness)));
+                p.line(Line::new("std of fitness", pts(&|s| s.std_fitness)));
+            });
     }
 }

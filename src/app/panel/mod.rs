@@ -87,3 +87,19 @@ fn header(ui: &mut egui::Ui, shown: &Shown, ctx: &PanelContext<'_>) {
         ui.colored_label(amber, n);
     }
 }
+
+/// A plot that fits the side panel's width and always shows all its data: labelled axes, bounds
+/// fitted to the curves every frame (no drag or zoom to leave them stale).
+pub(crate) fn fitted_plot(ui: &egui::Ui, id: &str, x: &str, y: &str) -> egui_plot::Plot<'static> {
+    egui_plot::Plot::new(id.to_owned())
+        .width(ui.available_width())
+        .height(120.0)
+        .x_axis_label(x.to_owned())
+        .y_axis_label(y.to_owned())
+        .auto_bounds(egui::Vec2b::TRUE)
+        .allow_drag(false)
+        .allow_zoom(false)
+        .allow_scroll(false)
+        .allow_boxed_zoom(false)
+        .allow_double_click_reset(false)
+}

@@ -1,12 +1,13 @@
 //! Panel section "Tools": the mouse tool, the probe's size, the force on the tool, the
 //! force-depth plot, and the paper's load cases with the live error against their FEM answer.
 
-use egui_plot::{Line, Plot, PlotPoints};
+use egui_plot::{Line, PlotPoints};
 
 use super::PanelContext;
 use crate::app::overlay::error_vs_fem;
 use crate::app::state::{Request, Shown, ToolKind, ViewSettings};
 use crate::cases::FORCES_N;
+use crate::sim::Tool;
 
 /// Draws the section.
 pub fn show(
@@ -28,10 +29,36 @@ pub fn show(
     let f = ctx.published.tool_force;
     let norm = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
     ui.label(format!("force on tool: |F| = {norm:.4} N  ({:.4}, {:.4}, {:.4})", f[0], f[1], f[2]));
-    if settings.tool == ToolKind::Probe {
-        Plot::new("force_depth").height(130.0).x_axis_label("depth (mm)").y_axis_label("force (N)").show(ui, |p| {
-            p.line(Line::new("force vs depth", PlotPoints::from(shown.force_depth.clone())));
+    if let Tool::Drag { .. } = shown.tool {
+        ui.label(format!(
+            "red arrow: the force on the tissue, {:.0} mm per newton",
+            crate::app::overlay::ARROW_M_PER_N * 1e3
+        ));
+    }
+    if let Tool::Probe { .. } = shown.tool {
+        ui.horizontal_wrapped(|ui| {
+            if ui.button("FEM force here").clicked() {
+                requests.push(Request::FemProbeForce);
+            }
+            if let Some((c, fem)) = shown.fem_probe {
+                ui.label(format!(
+                    "FEM {fem:.3} N vs model {norm:.3} N (x{:.3}) with the sphere at ({:.1}, {:.1}, {:.1}) mm; FEM: \
+                     node contact, small displacements, static",
+                    norm / fem.max(f64::MIN_POSITIVE),
+                    c[0] * 1e3,
+                    c[1] * 1e3,
+                    c[2] * 1e3
+                ));
+            }
         });
+    }
+    if settings.tool == ToolKind::Probe {
+        super::fitted_plot(ui, "force_depth", "probe depth (mm)", "probe force (N)")
+            .include_x(0.0)
+            .include_y(0.0)
+            .show(ui, |p| {
+                p.line(Line::new("force vs depth", PlotPoints::from(shown.force_depth.clone())));
+            });
     }
     ui.separator();
     ui.label("Paper's load case (clamped face, force on the opposite face):");

@@ -1,0 +1,173 @@
+//! The hex8 FEM cube (linear or corotational, lumped masses, mass-proportional damping) as a
+//! [`Tissue`]: the same tools, contact and blow-up guard act on it as on a spring lattice.
+//!
+//! The FEM's state is interleaved (`3 node + component`); the simulation's is node-wise. The
+//! node-wise copy is the state between steps, and a step copies it in and out (no allocation).
+
+use super::{Integrator, Tissue};
+use crate::cases::LoadCase;
+use crate::fem::FemModel;
+use crate::fem::dynamics::{FemDynamics, Formulation};
+use crate::grid::Grid;
+use crate::msm::MsmParams;
+
+/// A FEM cube as a [`Tissue`].
+#[derive(Debug)]
+pub struct FemTissue {
+    /// The FEM state and its step buffers.
+    pub dynamics: FemDynamics,
+    x: [Vec<f64>; 3],
+    v: [Vec<f64>; 3],
+    f_ext: [Vec<f64>; 3],
+    forces: [Vec<f64>; 3],
+    free: Vec<f64>,
+    dt_limit: f64,
+    total_mass: f64,
+}
+
+impl FemTissue {
+    /// `material` on `grid` at rest, with the damping rate `alpha` (1/s, `C = alpha M`).
+    pub fn new(grid: Grid, material: &crate::material::Material, formulation: Formulation, alpha: f64) -> Self {
+        let model = FemModel::new(grid, material);
+        let dt_limit = fem_dt_limit(&model, material.density, alpha);
+        let dynamics = FemDynamics::new(model, material.density, formulation, alpha);
+        let nn = grid.num_nodes();
+        let split = |v: &[f64]| -> [Vec<f64>; 3] { std::array::from_fn(|c| (0..nn).map(|p| v[3 * p + c]).collect()) };
+        Self {
+            x: split(&dynamics.x),
+            v: split(&dynamics.v),
+            f_ext: split(&dynamics.f_ext),
+            forces: std::array::from_fn(|_| vec![0.0; nn]),
+            free: vec![1.0; nn],
+            dt_limit,
+            total_mass: dynamics.mass.iter().sum::<f64>() / 3.0,
+            dynamics,
+        }
+    }
+
+    fn copy_in(&mut self) {
+        let d = &mut self.dynamics;
+        for c in 0..3 {
+            for p in 0..self.free.len() {
+                d.x[3 * p + c] = self.x[c][p];
+                d.v[3 * p + c] = self.v[c][p];
+                d.f_ext[3 * p + c] = self.f_ext[c][p];
+            }
+        }
+    }
+
+    fn copy_out(&mut self) {
+        for c in 0..3 {
+            for p in 0..self.free.len() {
+                self.x[c][p] = self.dynamics.x[3 * p + c];
+                self.v[c][p] = self.dynamics.v[3 * p + c];
+            }
+        }
+    }
+}
+
+/// Critical step of symplectic Euler for the FEM cube, on the safe side: `2 / omega_max` with
+/// Gershgorin's bound `omega_max^2 <= max_i sum_j |K_ij| / m_i`, narrowed by the damping to
+/// `2 / alpha`.
+fn fem_dt_limit(model: &FemModel, density: f64, alpha: f64) -> f64 {
+    let dofs = 3 * model.grid.num_nodes();
+    let mut row = vec![0.0f64; dofs];
+    let (entries, values) = model.stiffness_entries();
+    for (&(r, c), v) in entries.iter().zip(&values) {
+        row[r] += v.abs();
+        if r != c {
+            row[c] += v.abs();
+        }
+    }
+    let mut mass = vec![0.0; dofs];
+    let m_e = density * model.grid.h().powi(3) / 8.0;
+    for nodes in model.elements() {
+        for &p in nodes {
+            for c in 0..3 {
+                mass[3 * p + c] += m_e;
+            }
+        }
+    }
+    let lambda = row.iter().zip(&mass).map(|(r, m)| r / m).fold(0.0, f64::max);
+    let damping_limit = if alpha > 0.0 { 2.0 / alpha } else { f64::INFINITY };
+    (2.0 / lambda.sqrt()).min(damping_limit)
+}
+
+impl Tissue for FemTissue {
+    fn grid(&self) -> Grid {
+        self.dynamics.model.grid
+    }
+    fn total_mass(&self) -> f64 {
+        self.total_mass
+    }
+    fn x(&self) -> &[Vec<f64>; 3] {
+        &self.x
+    }
+    fn x_mut(&mut self) -> &mut [Vec<f64>; 3] {
+        &mut self.x
+    }
+    fn v(&self) -> &[Vec<f64>; 3] {
+        &self.v
+    }
+    fn v_mut(&mut self) -> &mut [Vec<f64>; 3] {
+        &mut self.v
+    }
+    fn x_v_mut(&mut self) -> (&mut [Vec<f64>; 3], &mut [Vec<f64>; 3]) {
+        (&mut self.x, &mut self.v)
+    }
+    fn f_ext_mut(&mut self) -> &mut [Vec<f64>; 3] {
+        &mut self.f_ext
+    }
+    fn free(&self) -> &[f64] {
+        &self.free
+    }
+    fn forces(&mut self) -> &[Vec<f64>; 3] {
+        self.copy_in();
+        let f = self.dynamics.forces();
+        for c in 0..3 {
+            for (p, out) in self.forces[c].iter_mut().enumerate() {
+                *out = f[3 * p + c];
+            }
+        }
+        &self.forces
+    }
+    fn step(&mut self, integrator: Integrator, dt: f64) -> Result<(), String> {
+        self.copy_in();
+        match integrator {
+            Integrator::Symplectic => self.dynamics.step_symplectic(dt),
+            Integrator::Prefactored => self.dynamics.step_prefactored(dt).map_err(|e| e.to_string())?,
+            Integrator::Implicit => {
+                return Err("the FEM models step with symplectic or prefactored implicit Euler, not implicit".into());
+            }
+        }
+        self.copy_out();
+        Ok(())
+    }
+    fn kinetic_energy(&self) -> f64 {
+        let m = &self.dynamics.mass;
+        0.5 * (0..self.free.len())
+            .map(|p| (0..3).map(|c| m[3 * p + c] * self.v[c][p] * self.v[c][p]).sum::<f64>())
+            .sum::<f64>()
+    }
+    fn explicit_dt_limit(&self) -> f64 {
+        self.dt_limit
+    }
+    fn apply_case(&mut self, case: &LoadCase) {
+        self.copy_in();
+        self.dynamics.apply_case(case);
+        for (p, f) in self.free.iter_mut().enumerate() {
+            *f = if case.fixed[3 * p..3 * p + 3].iter().all(|&x| x) { 0.0 } else { 1.0 };
+        }
+        for c in 0..3 {
+            for p in 0..self.free.len() {
+                self.f_ext[c][p] = case.load[3 * p + c];
+            }
+        }
+    }
+    fn params(&self) -> Option<MsmParams> {
+        None
+    }
+    fn set_params(&mut self, _params: MsmParams) -> Result<(), String> {
+        Err("a FEM model has no spring parameters".into())
+    }
+}
