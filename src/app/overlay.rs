@@ -31,7 +31,7 @@ pub struct Show {
 }
 
 /// Length of the drag force arrow per newton, metres.
-pub const ARROW_M_PER_N: f32 = 0.02;
+pub const ARROW_M_PER_N: f32 = 0.005;
 /// Line segments of each of the probe sphere's three circles.
 const CIRCLE_SEGMENTS: usize = 48;
 

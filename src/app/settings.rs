@@ -112,8 +112,10 @@ pub struct Shown {
     pub validation: Option<Result<crate::tissue::RecordedScores, String>>,
     /// The tool held now (drawn over the tissue).
     pub tool: crate::sim::Tool,
-    /// The FEM's probe force (N) for a sphere position (centre), solved on request.
-    pub fem_probe: Option<([f64; 3], f64)>,
+    /// The probe's last position (centre, radius; metres), kept after it is let go.
+    pub last_probe: Option<([f64; 3], f64)>,
+    /// The FEM's and the model's probe force at the last probe position, solved on request.
+    pub fem_probe: Option<super::state::ProbeComparison>,
 }
 
 impl Shown {

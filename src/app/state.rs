@@ -58,6 +58,18 @@ pub enum Request {
     ForceSample([f64; 2]),
 }
 
+/// The probe force of the FEM and of the running model at one sphere position (static, small
+/// displacements, node contact).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProbeComparison {
+    /// The sphere's centre, metres.
+    pub centre: [f64; 3],
+    /// The FEM's force, newtons.
+    pub fem_n: f64,
+    /// The model's force, newtons, or why it has none.
+    pub model_n: Result<f64, String>,
+}
+
 /// The viewer's state.
 pub struct ViewerState {
     /// What the panel edits directly.
@@ -70,7 +82,7 @@ pub struct ViewerState {
     validation: Slot<Result<crate::tissue::RecordedScores, String>>,
     /// The model changed while a validation ran: score it again when that one ends.
     validation_stale: bool,
-    fem_probe: Slot<Result<([f64; 3], f64), String>>,
+    fem_probe: Slot<Result<ProbeComparison, String>>,
     wake: Arc<dyn Fn() + Send + Sync>,
 }
 
@@ -112,6 +124,7 @@ impl ViewerState {
                 fem: None,
                 validation: None,
                 tool: Tool::None,
+                last_probe: None,
                 fem_probe: None,
             },
             grid,
@@ -189,6 +202,9 @@ impl ViewerState {
             }
             Request::Tool(t) => {
                 self.shown.tool = t;
+                if let Tool::Probe { centre, radius } = t {
+                    self.shown.last_probe = Some((centre, radius));
+                }
                 send(Command::SetTool(t));
             }
             Request::ProbeStarted => self.shown.force_depth.clear(),
@@ -245,10 +261,7 @@ impl ViewerState {
         self.validation_stale = false;
         self.shown.validation = None;
         let (material, grid) = (self.shown.material.clone(), self.grid);
-        let model = match self.shown.model() {
-            ModelChoice::Fem(f) => crate::touch::ModelUnderTest::Fem(f),
-            ModelChoice::Lattice(_) => crate::touch::ModelUnderTest::Lattice(self.shown.params),
-        };
+        let model = self.model_under_test();
         let wake = Arc::clone(&self.wake);
         let started = self.validation.start(
             "touch validation",
@@ -270,29 +283,44 @@ impl ViewerState {
         }
     }
 
-    /// The FEM's force on the probe sphere where it is now (node contact, small displacements).
+    /// The FEM's force and the running model's on the probe sphere where it was last pressed,
+    /// both static in their small-displacement response with the same node contact.
     fn start_fem_probe(&mut self) {
-        let Tool::Probe { centre, radius } = self.shown.tool else {
+        let Some((centre, radius)) = self.shown.last_probe else {
             self.shown.note = Some("press the probe into the cube first".into());
             return;
         };
         let (material, grid) = (self.shown.material.clone(), self.grid);
+        let model = self.model_under_test();
         let wake = Arc::clone(&self.wake);
         let started = self.fem_probe.start(
             "FEM probe force",
             move || wake(),
             move |ctx| {
-                let fem = FemModel::new(grid, &material);
-                let k = crate::touch::linear::GroupedStiffness::fem(&fem);
-                let r = crate::touch::score::Responder::new(grid, k, &[1.0])
-                    .and_then(|mut r| r.solver.probe(&grid, centre, radius))
-                    .map(|a| (centre, a.force.iter().map(|f| f * f).sum::<f64>().sqrt()))
-                    .map_err(|e| e.to_string());
-                ctx.send(r);
+                let force = |m: crate::touch::ModelUnderTest| -> anyhow::Result<f64> {
+                    let (mut r, _) = m.responder(&material, grid)?;
+                    let a = r.solver.probe(&grid, centre, radius)?;
+                    Ok(a.force.iter().map(|f| f * f).sum::<f64>().sqrt())
+                };
+                let fem = force(crate::touch::ModelUnderTest::Fem(crate::fem::dynamics::Formulation::Linear));
+                let r = fem.map(|f| ProbeComparison {
+                    centre,
+                    fem_n: f,
+                    model_n: force(model).map_err(|e| format!("{e:#}")),
+                });
+                ctx.send(r.map_err(|e| format!("{e:#}")));
             },
         );
         if let Err(e) = started {
             self.shown.note = Some(e.to_string());
+        }
+    }
+
+    /// The running model as the touch benchmark scores it.
+    fn model_under_test(&self) -> crate::touch::ModelUnderTest {
+        match self.shown.model() {
+            ModelChoice::Fem(f) => crate::touch::ModelUnderTest::Fem(f),
+            ModelChoice::Lattice(_) => crate::touch::ModelUnderTest::Lattice(self.shown.params),
         }
     }
 
@@ -479,5 +507,19 @@ mod tests {
             std::thread::sleep(std::time::Duration::from_millis(2));
         }
         assert!(!state.shown.calibrating, "cancelled within a generation");
+    }
+
+    #[test]
+    fn the_fem_runs_in_place_of_the_lattice_and_back() {
+        let (mut state, physics) = started();
+        let mut send = |c| physics.send(c).expect("physics runs");
+        state.handle(Request::SelectFem(crate::fem::dynamics::Formulation::Corotational), &mut send);
+        assert_eq!(state.shown.model().name(), "fem-corotational");
+        let before = wait_until(&physics, |p| p.params.is_some()).revision;
+        let p = wait_until(&physics, |p| p.params.is_none() && p.revision > before);
+        assert!(p.params.is_none(), "the FEM has no spring parameters");
+        state.handle(Request::SelectTopology(Topology::Hex), &mut send);
+        let p = wait_until(&physics, |p| p.params.is_some());
+        assert_eq!(p.params.map(|p| p.topology()), Some(Topology::Hex));
     }
 }

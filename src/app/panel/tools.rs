@@ -35,19 +35,23 @@ pub fn show(
             crate::app::overlay::ARROW_M_PER_N * 1e3
         ));
     }
-    if let Tool::Probe { .. } = shown.tool {
+    if settings.tool == ToolKind::Probe && shown.last_probe.is_some() {
         ui.horizontal_wrapped(|ui| {
-            if ui.button("FEM force here").clicked() {
+            if ui.button("FEM force at the last probe position").clicked() {
                 requests.push(Request::FemProbeForce);
             }
-            if let Some((c, fem)) = shown.fem_probe {
+            if let Some(cmp) = &shown.fem_probe {
+                let c = cmp.centre;
+                let model = match &cmp.model_n {
+                    Ok(m) => format!("model {m:.3} N (x{:.3})", m / cmp.fem_n.max(f64::MIN_POSITIVE)),
+                    Err(e) => format!("model: {e}"),
+                };
                 ui.label(format!(
-                    "FEM {fem:.3} N vs model {norm:.3} N (x{:.3}) with the sphere at ({:.1}, {:.1}, {:.1}) mm; FEM: \
-                     node contact, small displacements, static",
-                    norm / fem.max(f64::MIN_POSITIVE),
+                    "sphere at ({:.1}, {:.1}, {:.1}) mm, static with node contact: FEM {:.3} N, {model}",
                     c[0] * 1e3,
                     c[1] * 1e3,
-                    c[2] * 1e3
+                    c[2] * 1e3,
+                    cmp.fem_n
                 ));
             }
         });
