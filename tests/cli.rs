@@ -197,12 +197,17 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("chart");
     let out_s = out.to_str().expect("utf8");
-    let o = run(&["chart", "--out", out_s, "--objects", "A", "--resolutions", "4,6", "--no-stability"]);
+    let o = run(&["chart", "--out", out_s, "--objects", "A", "--resolutions", "4,8", "--no-stability"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("chart.csv")).expect("chart.csv");
-    // 5 models x 2 resolutions x 2 integrators, plus the header.
-    assert_eq!(csv.lines().count(), 21, "{csv}");
-    assert!(csv.lines().next().expect("header").contains("avg_err_pct"));
+    // 4 charted models (not the paper's axis lattice) x 2 resolutions x 2 integrators, plus the header.
+    assert_eq!(csv.lines().count(), 17, "{csv}");
+    assert!(!csv.contains("msm-axis"), "the axis lattice has no held-out score");
+    let header = csv.lines().next().expect("header");
+    assert!(header.contains("avg_err_pct") && header.contains("force_err_pct"), "{header}");
+    // Touch force errors at the viewer's 8^3 scene only.
+    let points = tissue_sim::study::read_chart_csv(&out).expect("reads back");
+    assert!(points.iter().all(|p| (p.n == 8) != p.force_err_pct.is_nan()), "{csv}");
     assert!(csv.contains(",true"), "a Pareto front is marked");
     assert!(std::fs::read_to_string(out.join("chart.svg")).expect("svg").contains("<svg"));
     let chart = out.join("chart.csv");
@@ -372,8 +377,8 @@ fn chart_files_are_checked_and_an_interrupted_chart_leaves_no_directory() {
     let bad = dir.path().join("bad.csv");
     std::fs::write(
         &bad,
-        "object,model,n,integrator,step_s,dt_max_s,static_s,memory_bytes,avg_err_pct,max_err_pct,pareto\n\
-         A,msm-axis,4,explicit,-7,1e-3,1e-3,100,0.5,1.0,true\n",
+        "object,model,n,integrator,step_s,dt_max_s,static_s,memory_bytes,avg_err_pct,max_err_pct,force_err_pct,pareto\n\
+         A,msm-hex,4,explicit,-7,1e-3,1e-3,100,0.5,1.0,NaN,true\n",
     )
     .expect("write");
     let o = run(&["choose", "--chart", bad.to_str().expect("utf8"), "--max-error", "5"]);

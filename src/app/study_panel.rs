@@ -5,7 +5,7 @@ use egui_plot::{Corner, Legend, MarkerShape, Plot, PlotPoints, Points};
 
 use super::worker::{Slot, State};
 use crate::study::chart::{ChartIntegrator, ChartOptions, ChartPoint, ModelKind, compute};
-use crate::study::choose::{Choice, Metric, choose};
+use crate::study::choose::{Budget, Choice, Metric, choose};
 
 const COLOURS: [egui::Color32; 5] = [
     egui::Color32::from_rgb(31, 119, 180),
@@ -27,6 +27,8 @@ pub struct StudyPanel {
     status: String,
     csv_path: String,
     max_error: f64,
+    max_force_error: f64,
+    bound_static: bool,
     rate: f64,
     metric: Metric,
     choice: Option<Choice>,
@@ -40,6 +42,8 @@ impl Default for StudyPanel {
             status: String::new(),
             csv_path: "chart/chart.csv".into(),
             max_error: 1.5,
+            max_force_error: 7.0,
+            bound_static: false,
             rate: 1000.0,
             metric: Metric::Max,
             choice: None,
@@ -85,8 +89,15 @@ impl StudyPanel {
         }
         speed_accuracy_plot(ui, &mine);
         ui.horizontal(|ui| {
-            ui.label("error budget");
-            ui.add(egui::DragValue::new(&mut self.max_error).speed(0.01).range(0.001..=100.0).suffix(" % of h"));
+            ui.label("touch force budget");
+            ui.add(egui::DragValue::new(&mut self.max_force_error).speed(0.1).range(0.1..=100.0).suffix(" %"));
+        });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.bound_static, "paper cases too");
+            ui.add_enabled(
+                self.bound_static,
+                egui::DragValue::new(&mut self.max_error).speed(0.01).range(0.001..=100.0).suffix(" % of h"),
+            );
             ui.selectable_value(&mut self.metric, Metric::Max, "max");
             ui.selectable_value(&mut self.metric, Metric::Avg, "avg");
         });
@@ -94,7 +105,13 @@ impl StudyPanel {
             ui.label("rate");
             ui.add(egui::DragValue::new(&mut self.rate).speed(10.0).range(1.0..=100_000.0).suffix(" Hz"));
             if ui.button("Choose").clicked() {
-                self.choice = Some(choose(&self.points, object, self.max_error, self.rate, self.metric));
+                let budget = Budget {
+                    max_force_error_pct: self.max_force_error,
+                    max_error_pct: self.bound_static.then_some(self.max_error),
+                    metric: self.metric,
+                    rate_hz: self.rate,
+                };
+                self.choice = Some(choose(&self.points, object, &budget));
             }
         });
         if let Some(c) = &self.choice {
