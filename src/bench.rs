@@ -32,6 +32,40 @@ pub struct BenchReport {
     pub msm_static_9_cases_newton_s: f64,
     /// Newton on the 9 cases of the shear-spring model.
     pub msm_shear_static_9_cases_newton_s: f64,
+    /// One 1 ms physics tick of the viewer's scene (face z = 0 clamped, object A, 8^3) with the
+    /// probe pressed 4 mm into the top face, keyed by `model/integrator/dt`: the viewer keeps up
+    /// with 1 kHz real time when this is below 1 ms.
+    pub viewer_tick_with_probe_s: BTreeMap<String, f64>,
+}
+
+/// One 1 ms tick of `model` in the viewer's scene with the probe pressed 4 mm into the top face
+/// (after 0.2 s of settling), stepping `integrator` at `dt`.
+fn probe_tick(model: crate::sim::ModelChoice, integrator: crate::sim::Integrator, dt: f64) -> anyhow::Result<f64> {
+    use crate::sim::{Simulation, Tool};
+    let material = Material::object_a();
+    let grid = Grid::paper();
+    let tissue = model.build(&material, None)?;
+    let mut sim = Simulation::with_tissue(tissue, integrator, dt, Some(&LoadCase::bottom_clamp(&grid, "A")));
+    let r = crate::touch::PROBE_RADIUS_M;
+    sim.tool = Tool::Probe { centre: [0.05, 0.05, crate::grid::CUBE_SIDE_M + r - 0.004], radius: r };
+    let steps = (1e-3 / dt).round().max(1.0) as usize;
+    let mut failed = None;
+    for _ in 0..(0.2 / dt) as usize {
+        if let Err(e) = sim.step() {
+            failed = Some(e.message);
+        }
+    }
+    let t = time_per_call(1.0, || {
+        for _ in 0..steps {
+            if let Err(e) = sim.step() {
+                failed = Some(e.message.clone());
+            }
+        }
+    });
+    match failed {
+        Some(m) => anyhow::bail!("{} with {} at dt = {dt}: {m}", model.name(), integrator.name()),
+        None => Ok(t),
+    }
 }
 
 /// Median time per call of `f`, from batches of at least ~20 ms over about `budget_s` seconds.
@@ -144,7 +178,22 @@ pub fn run() -> anyhow::Result<BenchReport> {
     let msm_static_9_cases_newton_s = newton(&model);
     let shear = MsmModel::new(grid, shear_params(), material.density)?;
     let msm_shear_static_9_cases_newton_s = newton(&shear);
+    let mut viewer_tick_with_probe_s = BTreeMap::new();
+    {
+        use crate::fem::dynamics::Formulation;
+        use crate::sim::{Integrator, ModelChoice};
+        for (model, integrator, dt) in [
+            (ModelChoice::Lattice(crate::tissue::DEFAULT_TOPOLOGY), Integrator::Symplectic, 1e-4),
+            (ModelChoice::Fem(Formulation::Corotational), Integrator::Symplectic, 1e-4),
+            (ModelChoice::Fem(Formulation::Corotational), Integrator::Prefactored, 1e-3),
+            (ModelChoice::Fem(Formulation::Linear), Integrator::Prefactored, 1e-3),
+        ] {
+            let key = format!("{}/{}/{dt}", model.name(), integrator.name());
+            viewer_tick_with_probe_s.insert(key, probe_tick(model, integrator, dt)?);
+        }
+    }
     Ok(BenchReport {
+        viewer_tick_with_probe_s,
         msm_explicit_step_s,
         msm_shear_explicit_step_s,
         msm_implicit_step_s,
@@ -178,6 +227,14 @@ impl BenchReport {
         s += &format!("{:<46}: {}\n", "MSM static, 9 cases, Newton (axis)", us(self.msm_static_9_cases_newton_s));
         s +=
             &format!("{:<46}: {}\n", "MSM static, 9 cases, Newton (shear)", us(self.msm_shear_static_9_cases_newton_s));
+        for (key, t) in &self.viewer_tick_with_probe_s {
+            s += &format!(
+                "{:<46}: {} ({:.0} ticks/s possible)\n",
+                format!("viewer 1 ms tick + probe, {key}"),
+                us(*t),
+                1.0 / t
+            );
+        }
         s
     }
 }

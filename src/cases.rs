@@ -67,6 +67,13 @@ impl LoadCase {
         Self { id: Self::make_id(object, Bc::Clamped, axis, force_n), bc: Bc::Clamped, axis, force_n, fixed, load }
     }
 
+    /// The viewer's scene: face z = 0 fully fixed, no loads (the touch benchmark's scene too).
+    pub fn bottom_clamp(grid: &Grid, object: &str) -> Self {
+        let mut c = Self::clamped(grid, object, 3, 0.0);
+        c.load.fill(0.0);
+        c
+    }
+
     /// The patch case: rollers on `x_a = 0` (`u_a = 0`), node 0 also `u_b = u_c = 0`, the node at
     /// `x_b = L` on the `x_a = 0, x_c = 0` edge also `u_c = 0`, with `(a, b, c)` cyclic; the
     /// consistent nodal loads of the traction `F / L^2` on face `x_a = L`.

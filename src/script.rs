@@ -341,11 +341,7 @@ fn check_bounds(script: &Script) -> anyhow::Result<()> {
 fn clamp_case(grid: &Grid, object: &str, clamp: &str) -> anyhow::Result<Option<LoadCase>> {
     Ok(match clamp {
         "none" => None,
-        "bottom" => {
-            let mut c = LoadCase::clamped(grid, object, 3, 0.0);
-            c.load.fill(0.0);
-            Some(c)
-        }
+        "bottom" => Some(LoadCase::bottom_clamp(grid, object)),
         id => {
             let case = parse_case_id(grid, id).map_err(|e| anyhow::anyhow!("script: clamp: {e}"))?.1;
             if case.bc != crate::cases::Bc::Clamped {

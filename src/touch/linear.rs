@@ -120,9 +120,9 @@ impl GroupedStiffness {
     }
 }
 
-/// The nodes the touch scene holds: face z = 0.
+/// The dofs the touch scene holds: face z = 0 ([`crate::cases::LoadCase::bottom_clamp`]).
 pub fn scene_fixed_dofs(grid: &Grid) -> Vec<bool> {
-    (0..3 * grid.num_nodes()).map(|d| grid.ijk(d / 3)[2] == 0).collect()
+    crate::cases::LoadCase::bottom_clamp(grid, "touch").fixed
 }
 
 /// A factorised rest stiffness on the touch scene.
