@@ -4,9 +4,10 @@
 //! For each loaded axis the model is clamped on face `x_a = 0` and restricted to the
 //! mirror-symmetric subspace of that case (the loads of the benchmark excite nothing else; it also
 //! removes the zero-frequency shear modes of the axis-only lattice). The smallest eigenvalue of
-//! `K c = omega^2 m D c` (`D = P^T P`, lumped masses) comes from inverse iteration with the
-//! rest tangent's sparse Cholesky factorisation; `d = 2 m omega_min` over the three axes makes that
-//! mode critically damped (nodal damping `-d v` damps every mode at rate `d / 2m`).
+//! `K c = omega^2 P^T M P c` (the model's node masses) comes from inverse iteration with the
+//! rest tangent's sparse Cholesky factorisation; `d = 2 m omega_min` over the three axes, `m` the
+//! mean node mass, makes that mode critically damped (nodal damping `-d v` damps a mode at rate
+//! `d / 2m` where the masses are equal).
 
 use crate::msm::MsmModel;
 use crate::msm::forces::TangentAssembler;
@@ -25,7 +26,9 @@ pub fn critical_damping(model: &MsmModel) -> Result<(f64, f64), CostError> {
         t.assemble(model, &rest, 1.0, 0.0, false, None);
         t.system.factor()?;
         let n = t.dofs.n;
-        let w = t.dofs.multiplicity.clone();
+        // The mass of each unknown (D m for equal masses): c^T M c = 1 below.
+        let mut w = vec![0.0; n];
+        t.dofs.fold_masses(&model.masses, &mut w);
         let mut c: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 * 0.1).collect();
         let mut kc = vec![0.0; n];
         let mut lambda = 0.0;
@@ -42,7 +45,7 @@ pub fn critical_damping(model: &MsmModel) -> Result<(f64, f64), CostError> {
                 break;
             }
         }
-        omega_min = omega_min.min((lambda / model.node_mass).sqrt());
+        omega_min = omega_min.min(lambda.sqrt());
     }
     Ok((2.0 * model.node_mass * omega_min, omega_min))
 }

@@ -51,12 +51,15 @@ pub fn transient_displacements(
             .collect());
     }
     let rest: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|p| grid.position(p)[c]).collect());
-    if !prepared {
-        tangent.assemble(model, &rest, h * h, m + h * d, false, None);
-        tangent.system.factor()?;
-    }
     let r = tangent.dofs.n;
     let w = tangent.dofs.multiplicity.clone();
+    let mut mass = vec![0.0; r];
+    tangent.dofs.fold_masses(&model.masses, &mut mass);
+    if !prepared {
+        tangent.assemble(model, &rest, h * h, h * d, false, None);
+        tangent.system.add_diagonal_scaled(1.0, &mass);
+        tangent.system.factor()?;
+    }
     let (mut cx, mut cv) = (vec![0.0; r], vec![0.0; r]);
     let (mut rhs, mut acv) = (vec![0.0; r], vec![0.0; r]);
     let mut x = rest.clone();
@@ -70,10 +73,10 @@ pub fn transient_displacements(
         }
         add_spring_forces(model, &x, &mut f, &mut scratch);
         tangent.dofs.fold(&f, &mut rhs);
-        // h K0 v = (A v - (m + h d) D v) / h, from the stored A = (m + h d) D + h^2 K0.
+        // h K0 v = (A v - (M + h d D) v) / h, from the stored A = M + h d D + h^2 K0.
         tangent.system.mul(&cv, &mut acv);
         for i in 0..r {
-            let hk0v = (acv[i] - (m + h * d) * w[i] * cv[i]) / h;
+            let hk0v = (acv[i] - (mass[i] + h * d * w[i]) * cv[i]) / h;
             rhs[i] = h * (rhs[i] - d * w[i] * cv[i] - hk0v);
         }
         tangent.system.solve_in_place(&mut rhs)?;

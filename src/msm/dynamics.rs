@@ -25,6 +25,8 @@ pub struct Dynamics {
     prefactored: Option<PrefactoredWork>,
     /// Linear offsets of the model's spring families (the topology the buffers are built for).
     family_offsets: Vec<usize>,
+    /// `1 / m` of each node.
+    inv_mass: Vec<f64>,
 }
 
 #[derive(Debug)]
@@ -32,6 +34,8 @@ struct ImplicitWork {
     tangent: TangentAssembler,
     kv: [Vec<f64>; 3],
     rhs: Vec<f64>,
+    /// The masses of the unknowns.
+    mass: Vec<f64>,
 }
 
 /// The prefactored step's system `M + dt D + dt^2 K_0` (`K_0`: the rest tangent), factorised for
@@ -43,6 +47,8 @@ struct PrefactoredWork {
     rest: [Vec<f64>; 3],
     /// The `dt` of the factor; NaN when it must be rebuilt (new parameters).
     dt: f64,
+    /// The masses of the unknowns.
+    mass: Vec<f64>,
 }
 
 impl Dynamics {
@@ -62,6 +68,7 @@ impl Dynamics {
             implicit: None,
             prefactored: None,
             family_offsets: model.families.iter().map(|f| f.offset).collect(),
+            inv_mass: model.masses.iter().map(|m| 1.0 / m).collect(),
         }
     }
 
@@ -91,6 +98,9 @@ impl Dynamics {
             self.implicit = None;
             self.prefactored = None;
             self.family_offsets = offsets;
+        }
+        for (i, m) in self.inv_mass.iter_mut().zip(&model.masses) {
+            *i = 1.0 / m;
         }
         if let Some(work) = self.prefactored.as_mut() {
             work.dt = f64::NAN; // new stiffness: refactorise at the next step
@@ -125,7 +135,8 @@ impl Dynamics {
                 let tangent = TangentAssembler::new(model, DofMap::free(&fixed))?;
                 let rhs = vec![0.0; tangent.system.n()];
                 let nn = self.free.len();
-                ImplicitWork { tangent, kv: std::array::from_fn(|_| vec![0.0; nn]), rhs }
+                let mass = vec![0.0; tangent.system.n()];
+                ImplicitWork { tangent, kv: std::array::from_fn(|_| vec![0.0; nn]), rhs, mass }
             }
         };
         self.forces(model);
@@ -134,8 +145,9 @@ impl Dynamics {
         for kv in work.kv.iter_mut() {
             kv.fill(0.0);
         }
-        let diag = model.node_mass + dt * d;
-        work.tangent.assemble(model, &self.x, dt * dt, diag, true, Some((&self.v, &mut work.kv)));
+        work.tangent.assemble(model, &self.x, dt * dt, dt * d, true, Some((&self.v, &mut work.kv)));
+        work.tangent.dofs.fold_masses(&model.masses, &mut work.mass);
+        work.tangent.system.add_diagonal_scaled(1.0, &work.mass);
         work.tangent.system.factor()?;
         for (p, &free) in self.free.iter().enumerate() {
             if free != 0.0 {
@@ -173,20 +185,23 @@ impl Dynamics {
                 let rhs = vec![0.0; tangent.system.n()];
                 let g = model.grid;
                 let rest = std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect());
-                PrefactoredWork { tangent, rhs, rest, dt: f64::NAN }
+                let mass = vec![0.0; tangent.system.n()];
+                PrefactoredWork { tangent, rhs, rest, dt: f64::NAN, mass }
             }
         };
         self.forces(model);
         let work = self.prefactored.insert(work);
-        let m = model.node_mass;
         let d = model.params.d;
         if work.dt != dt {
-            work.tangent.assemble(model, &work.rest, dt * dt, m + dt * d, false, None);
+            work.tangent.assemble(model, &work.rest, dt * dt, dt * d, false, None);
+            work.tangent.dofs.fold_masses(&model.masses, &mut work.mass);
+            work.tangent.system.add_diagonal_scaled(1.0, &work.mass);
             work.tangent.system.factor()?;
             work.dt = dt;
         }
         for (p, &free) in self.free.iter().enumerate() {
             if free != 0.0 {
+                let m = model.masses[p];
                 for c in 0..3 {
                     work.rhs[work.tangent.dofs.map[3 * p + c].0 as usize] = m * self.v[c][p] + dt * self.f[c][p];
                 }
@@ -213,8 +228,10 @@ impl Dynamics {
 
     /// Kinetic energy, joules.
     pub fn kinetic_energy(&self, model: &MsmModel) -> f64 {
-        let s: f64 = self.v.iter().flat_map(|v| v.iter()).map(|v| v * v).sum();
-        0.5 * model.node_mass * s
+        let s: f64 = (0..self.free.len())
+            .map(|p| model.masses[p] * (0..3).map(|c| self.v[c][p] * self.v[c][p]).sum::<f64>())
+            .sum();
+        0.5 * s
     }
 
     /// Displacements from the rest positions, row = node.
@@ -231,14 +248,15 @@ impl Dynamics {
 #[inline(always)]
 fn symplectic_step_generic(model: &MsmModel, s: &mut Dynamics, dt: f64) {
     pair_forces(model, &s.x, &mut s.scratch);
-    let h = dt / model.node_mass;
     let d = model.params.d;
     for c in 0..3 {
         let f = &mut s.f[c];
         gather_forces(model, &s.scratch, c, f, true);
         let (x, v, fe) = (&mut s.x[c], &mut s.v[c], &s.f_ext[c]);
-        for ((((x, v), f), fe), free) in x.iter_mut().zip(v.iter_mut()).zip(f.iter()).zip(fe).zip(&s.free) {
-            let vn = (*v + h * (f + fe - d * *v)) * free;
+        for (((((x, v), f), fe), free), inv_m) in
+            x.iter_mut().zip(v.iter_mut()).zip(f.iter()).zip(fe).zip(&s.free).zip(&s.inv_mass)
+        {
+            let vn = (*v + dt * inv_m * (f + fe - d * *v)) * free;
             *v = vn;
             *x += dt * vn;
         }

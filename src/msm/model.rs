@@ -167,6 +167,18 @@ impl MsmParams {
 /// floating point, above it no soft tissue (and no stable step) lies.
 pub const STIFFNESS_RANGE: (f64, f64) = (1e-6, 1e10);
 
+/// Element-lumped node masses: `density h^3 / 8` from each element at each of its nodes.
+pub fn lumped_masses(grid: &Grid, density: f64) -> Vec<f64> {
+    let mut m = vec![0.0; grid.num_nodes()];
+    let m_e = density * grid.h().powi(3) / 8.0;
+    for nodes in grid.elements() {
+        for p in nodes {
+            m[p] += m_e;
+        }
+    }
+    m
+}
+
 /// One spring family laid out for the force loop: pairs `(lo + p, lo + p + s)` for `p` in
 /// `0..stiffness.len()`, with `stiffness[p] = 0` where the lattice partner is outside the grid.
 #[derive(Debug, Clone)]
@@ -207,8 +219,13 @@ pub struct MsmModel {
     pub grid: Grid,
     /// The parameters.
     pub params: MsmParams,
-    /// Mass of every node, kg (the cube's mass shared equally).
+    /// The mean node mass, kg: the cube's mass over the nodes (every node's mass in the paper's
+    /// axis lattice and the shear lattice).
     pub node_mass: f64,
+    /// Mass of each node, kg: the cube's mass shared equally, except for the hex lattice, which
+    /// is assembled from elements and so lumps each element's mass onto its eight nodes (a
+    /// surface node carries less, as in the FEM's lumped masses).
+    pub masses: Vec<f64>,
     /// The spring families with non-zero stiffness.
     pub families: Vec<FamilyLayout>,
 }
@@ -254,7 +271,8 @@ impl MsmModel {
             .collect();
         let side = crate::grid::CUBE_SIDE_M;
         let node_mass = density * side * side * side / grid.num_nodes() as f64;
-        Ok(Self { grid, params, node_mass, families })
+        let masses = if hex { lumped_masses(&grid, density) } else { vec![node_mass; grid.num_nodes()] };
+        Ok(Self { grid, params, node_mass, masses, families })
     }
 
     /// All springs as an explicit list (for assembly of tangent matrices).
@@ -287,5 +305,23 @@ impl MsmModel {
             }
         }
         e
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hex_lattice_lumps_element_masses_the_others_share_equally() {
+        let grid = Grid::new(4).unwrap();
+        let hex = MsmModel::new(grid, MsmParams::unit(Topology::Hex), 1000.0).unwrap();
+        let total: f64 = hex.masses.iter().sum();
+        assert!((total - 1000.0 * 1e-3).abs() < 1e-12, "{total}");
+        let m_e = 1000.0 * grid.h().powi(3) / 8.0;
+        assert!((hex.masses[grid.node(0, 0, 0)] - m_e).abs() < 1e-15);
+        assert!((hex.masses[grid.node(1, 1, 1)] - 8.0 * m_e).abs() < 1e-15);
+        let shear = MsmModel::new(grid, MsmParams::unit(Topology::Shear), 1000.0).unwrap();
+        assert!(shear.masses.iter().all(|&m| m == shear.node_mass));
     }
 }

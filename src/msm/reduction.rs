@@ -28,6 +28,16 @@ pub struct DofMap {
 }
 
 impl DofMap {
+    /// The diagonal of `P^T M P` for node masses `masses` (kg), into `out` (one per unknown).
+    pub fn fold_masses(&self, masses: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        for (d, &(r, _)) in self.map.iter().enumerate() {
+            if r != u32::MAX {
+                out[r as usize] += masses[d / 3];
+            }
+        }
+    }
+
     /// Every dof of a free node is its own unknown; fixed nodes are held.
     pub fn free(fixed_node: &[bool]) -> Self {
         let mut map = vec![(u32::MAX, 1.0); 3 * fixed_node.len()];

@@ -79,16 +79,8 @@ fn fem_dt_limit(model: &FemModel, density: f64, alpha: f64) -> f64 {
             row[c] += v.abs();
         }
     }
-    let mut mass = vec![0.0; dofs];
-    let m_e = density * model.grid.h().powi(3) / 8.0;
-    for nodes in model.elements() {
-        for &p in nodes {
-            for c in 0..3 {
-                mass[3 * p + c] += m_e;
-            }
-        }
-    }
-    let lambda = row.iter().zip(&mass).map(|(r, m)| r / m).fold(0.0, f64::max);
+    let mass = crate::msm::model::lumped_masses(&model.grid, density);
+    let lambda = row.iter().enumerate().map(|(d, r)| r / mass[d / 3]).fold(0.0, f64::max);
     let damping_limit = if alpha > 0.0 { 2.0 / alpha } else { f64::INFINITY };
     (2.0 / lambda.sqrt()).min(damping_limit)
 }

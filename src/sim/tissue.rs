@@ -78,7 +78,7 @@ impl Tissue for MsmTissue {
         self.model.grid
     }
     fn total_mass(&self) -> f64 {
-        self.model.node_mass * self.model.grid.num_nodes() as f64
+        self.model.masses.iter().sum()
     }
     fn x(&self) -> &[Vec<f64>; 3] {
         &self.dynamics.x
@@ -136,7 +136,7 @@ impl Tissue for MsmTissue {
 
 /// Estimated critical time step of symplectic Euler for a lattice, `2 / omega_max` from
 /// Gershgorin's bound `omega_max^2 <= max_i sum_j |K_ij| / m` on the rest stiffness
-/// (conservative), narrowed by the nodal damping to `2 m / d`.
+/// (conservative, `m` each node's mass), narrowed by the nodal damping to `2 m_min / d`.
 pub fn explicit_dt_limit(model: &MsmModel) -> f64 {
     let mut row = vec![0.0f64; model.grid.num_nodes()];
     for s in model.springs() {
@@ -148,7 +148,8 @@ pub fn explicit_dt_limit(model: &MsmModel) -> f64 {
         row[s.a] += 2.0 * k * w;
         row[s.b] += 2.0 * k * w;
     }
-    let lambda = row.iter().copied().fold(0.0, f64::max) / model.node_mass;
-    let damping_limit = if model.params.d > 0.0 { 2.0 * model.node_mass / model.params.d } else { f64::INFINITY };
+    let lambda = row.iter().zip(&model.masses).map(|(r, m)| r / m).fold(0.0, f64::max);
+    let lightest = model.masses.iter().copied().fold(f64::INFINITY, f64::min);
+    let damping_limit = if model.params.d > 0.0 { 2.0 * lightest / model.params.d } else { f64::INFINITY };
     (2.0 / lambda.sqrt()).min(damping_limit)
 }

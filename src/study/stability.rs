@@ -76,7 +76,7 @@ pub fn msm_omega_max(model: &MsmModel, fixed_nodes: &[bool], iterations: usize) 
     let springs = msm_rest_stiffness(model);
     let dofs = 3 * model.grid.num_nodes();
     let free: Vec<bool> = (0..dofs).map(|d| !fixed_nodes[d / 3]).collect();
-    let mass = vec![model.node_mass; dofs];
+    let mass: Vec<f64> = (0..dofs).map(|d| model.masses[d / 3]).collect();
     lambda_max(&mass, &free, iterations, |u, out| {
         out.fill(0.0);
         for &(a, b, n, k) in &springs {

@@ -84,17 +84,9 @@ pub struct Reference {
 
 /// Lumped FEM masses per dof (`density h^3 / 8` from each element at a node), zero on the clamp.
 fn fem_masses(grid: &Grid, density: f64) -> Vec<f64> {
+    let nodal = crate::msm::model::lumped_masses(grid, density);
     let fixed = scene_fixed_dofs(grid);
-    let mut mass = vec![0.0; 3 * grid.num_nodes()];
-    let m_e = density * grid.h().powi(3) / 8.0;
-    for nodes in grid.elements() {
-        for p in nodes {
-            for c in 0..3 {
-                mass[3 * p + c] += m_e;
-            }
-        }
-    }
-    mass.iter().zip(&fixed).map(|(m, &f)| if f { 0.0 } else { *m }).collect()
+    fixed.iter().enumerate().map(|(d, &f)| if f { 0.0 } else { nodal[d / 3] }).collect()
 }
 
 impl Reference {
@@ -151,7 +143,7 @@ impl ModelUnderTest {
                 }
                 let model = MsmModel::new(grid, *params, material.density)?;
                 let fixed = scene_fixed_dofs(&grid);
-                let mass = fixed.iter().map(|&f| if f { 0.0 } else { model.node_mass }).collect();
+                let mass = fixed.iter().enumerate().map(|(d, &f)| if f { 0.0 } else { model.masses[d / 3] }).collect();
                 let stiffness = GroupedStiffness::lattice(grid, params.topology());
                 Ok((Responder::new(grid, stiffness, &group_values(params))?, mass))
             }

@@ -40,6 +40,10 @@ fn shipped_tissues_record_their_validation_scores_and_the_default_is_the_best() 
             }
         }
         assert_eq!(best.1, tissue_sim::tissue::DEFAULT_TOPOLOGY, "object {}", m.name);
+        // The default tissue's lowest six frequencies are within 5 % of the FEM's.
+        let default = tissue_sim::tissue::shipped(&m, tissue_sim::tissue::DEFAULT_TOPOLOGY).expect("shipped");
+        let f = default.validation.expect("scores").worst_frequency_error;
+        assert!(f < 0.05, "object {}: worst frequency error {f}", m.name);
     }
 }
 
