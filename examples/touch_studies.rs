@@ -15,10 +15,11 @@ use argmin::solver::quasinewton::LBFGS;
 use std::cell::RefCell;
 use tissue_sim::grid::Grid;
 use tissue_sim::material::Material;
-use tissue_sim::msm::{MsmModel, MsmParams, Topology};
+use tissue_sim::msm::Topology;
+use tissue_sim::touch::fit::touch_cost;
 use tissue_sim::touch::linear::{GroupedStiffness, group_of, group_values};
 use tissue_sim::touch::score::{Responder, case_score};
-use tissue_sim::touch::{Load, Reference, Set};
+use tissue_sim::touch::{Reference, Set};
 
 fn on_surface(grid: &Grid, p: usize) -> bool {
     grid.ijk(p).iter().any(|&c| c == 0 || c == grid.n() - 1)
@@ -26,34 +27,9 @@ fn on_surface(grid: &Grid, p: usize) -> bool {
 
 /// The hex lattice's rest stiffness with 14 groups: group `g` inside, `g + 7` on the surface.
 fn split_lattice(grid: Grid) -> GroupedStiffness {
-    let model = MsmModel::new(grid, MsmParams::unit(Topology::Hex), 1.0).expect("unit lattice");
-    let mut out = GroupedStiffness { entries: Vec::new(), unit: Vec::new(), group: Vec::new(), groups: 14 };
-    for s in model.springs() {
-        let fam = model.families[s.family].family;
-        let surface = on_surface(&grid, s.a) && on_surface(&grid, s.b);
-        let g = (group_of(fam) + if surface { 7 } else { 0 }) as u8;
-        let o = fam.offset.map(f64::from);
-        let len = (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt();
-        let d = o.map(|c| c / len);
-        for i in 0..3 {
-            for j in 0..3 {
-                let v = s.k * d[i] * d[j];
-                if v == 0.0 {
-                    continue;
-                }
-                for (r, c, sign) in
-                    [(3 * s.a + i, 3 * s.a + j, 1.0), (3 * s.b + i, 3 * s.b + j, 1.0), (3 * s.b + i, 3 * s.a + j, -1.0)]
-                {
-                    if r >= c {
-                        out.entries.push((r, c));
-                        out.unit.push(sign * v);
-                        out.group.push(g);
-                    }
-                }
-            }
-        }
-    }
-    out
+    GroupedStiffness::lattice_grouped(grid, Topology::Hex, 14, |s, family| {
+        group_of(family) + if on_surface(&grid, s.a) && on_surface(&grid, s.b) { 7 } else { 0 }
+    })
 }
 
 struct Problem<'a> {
@@ -65,40 +41,9 @@ impl Problem<'_> {
     /// Touch cost over `set` and its gradient by `ln theta`.
     fn eval(&self, s: &[f64], set: Set) -> (f64, Vec<f64>) {
         let theta: Vec<f64> = s.iter().map(|v| v.exp()).collect();
-        let mut r = self.responder.borrow_mut();
-        r.set_theta(&theta).expect("factorises");
-        let (mut cost, mut grad, mut count) = (0.0, vec![0.0; 14], 0usize);
-        let mut forms = vec![0.0; 14];
-        for (case, fem) in self.reference.cases.iter().zip(&self.reference.answers) {
-            if case.set != set {
-                continue;
-            }
-            count += 1;
-            let (answer, probe) = r.answer(case).expect("solves");
-            let ratio = answer.feel / fem.feel;
-            cost += (ratio - 1.0).powi(2);
-            if let (Load::Probe { .. }, Some(p)) = (&case.load, probe) {
-                r.stiffness.group_forms(&p.sensitivity, &answer.u, &mut forms);
-                for g in 0..14 {
-                    grad[g] += 2.0 * (ratio - 1.0) * (-forms[g] / fem.feel);
-                }
-            } else {
-                r.stiffness.group_forms(&answer.u, &answer.u, &mut forms);
-                for g in 0..14 {
-                    grad[g] += 2.0 * (ratio - 1.0) * (-forms[g] / fem.feel);
-                }
-                let ref2: f64 = fem.u.iter().map(|v| v * v).sum();
-                let mut adjoint: Vec<f64> = answer.u.iter().zip(&fem.u).map(|(a, b)| a - b).collect();
-                cost += adjoint.iter().map(|v| v * v).sum::<f64>() / ref2;
-                r.solver.solve(&mut adjoint).expect("solves");
-                r.stiffness.group_forms(&adjoint, &answer.u, &mut forms);
-                for g in 0..14 {
-                    grad[g] += -2.0 * forms[g] / ref2;
-                }
-            }
-        }
-        let n = count as f64;
-        (cost / n, grad.iter().zip(&theta).map(|(g, t)| g * t / n).collect())
+        let (cost, grad) =
+            touch_cost(self.reference, set, &mut self.responder.borrow_mut(), &theta).expect("touch cost");
+        (cost, grad.iter().zip(&theta).map(|(g, t)| g * t).collect())
     }
 
     fn worst_validation(&self, s: &[f64]) -> f64 {

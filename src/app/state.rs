@@ -307,8 +307,7 @@ impl ViewerState {
             move |ctx| {
                 let force = |m: crate::touch::ModelUnderTest| -> anyhow::Result<f64> {
                     let (mut r, _) = m.responder(&material, grid)?;
-                    let a = r.solver.probe(&grid, centre, radius)?;
-                    Ok(a.force.iter().map(|f| f * f).sum::<f64>().sqrt())
+                    Ok(r.solver.probe(&grid, centre, radius)?.force_n())
                 };
                 let fem = force(crate::touch::ModelUnderTest::Fem(crate::fem::dynamics::Formulation::Linear));
                 let r = fem.map(|f| ProbeComparison {

@@ -197,11 +197,6 @@ impl Problem {
         }
     }
 
-    /// The paper cost of zero displacements, metres (the combined objective's scale).
-    pub fn paper_scale(&self) -> f64 {
-        self.paper_scale
-    }
-
     /// The paper's cost (eq. 1) of `params` with static equilibria, metres.
     pub fn cost(&self, params: &MsmParams, ws: &mut Workspace) -> Result<f64, CostError> {
         params.validate()?;
@@ -270,7 +265,10 @@ impl Problem {
                 empty => empty.insert(crate::touch::fit::lattice_responder(reference, self.topology)?),
             };
             let theta = crate::touch::linear::group_values(params);
-            Ok(crate::touch::fit::touch_cost(reference, crate::touch::Set::Training, responder, &theta)?)
+            let (cost, g) = crate::touch::fit::touch_cost(reference, crate::touch::Set::Training, responder, &theta)?;
+            let mut grad = [0.0; 7];
+            grad.copy_from_slice(&g);
+            Ok((cost, grad))
         };
         match self.case_set {
             super::CaseSet::Paper => self.paper_gradient(params, ws),

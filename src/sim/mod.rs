@@ -57,9 +57,9 @@ impl ModelChoice {
                 Box::new(MsmTissue::new(MsmModel::new(grid, p, material.density)?, material.density))
             }
             ModelChoice::Fem(f) => {
-                let d = crate::tissue::default_params(material).map(|p| p.d).unwrap_or(0.0);
-                let node_mass = material.density * crate::grid::CUBE_SIDE_M.powi(3) / grid.num_nodes() as f64;
-                Box::new(FemTissue::new(grid, material, f, d / node_mass))
+                // Undamped for a material without a shipped tissue.
+                let alpha = crate::tissue::fem_damping_rate(material).unwrap_or(0.0);
+                Box::new(FemTissue::new(grid, material, f, alpha))
             }
         })
     }

@@ -488,9 +488,8 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
             .map(|s| s.displacements)
             .collect();
         let reference = sampled(&ref_grid, &reference);
-        // Same damping as the shipped hex tissue, as a mass-proportional rate.
-        let hex = tissue_params(&material, Topology::Hex)?;
-        let alpha = hex.d / (material.density * CUBE_SIDE_M.powi(3) / Grid::paper().num_nodes() as f64);
+        // Same damping as the default tissue, as a mass-proportional rate.
+        let alpha = crate::tissue::fem_damping_rate(&material)?;
         for &n in &opts.resolutions {
             let grid = Grid::new(n)?;
             let touch = if n == Grid::paper().n() {

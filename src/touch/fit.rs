@@ -13,9 +13,9 @@
 //! and Cavusoglu 2010): the non-negative least-squares fit of the lattice's stiffness matrix to
 //! the FEM's in the Frobenius norm, solved exactly over the few parameters.
 
+use super::Set;
 use super::linear::{GroupedStiffness, with_group_values};
 use super::score::{Reference, Responder};
-use super::{Load, Set};
 use crate::fem::FemModel;
 use crate::msm::{MsmParams, Topology};
 
@@ -69,51 +69,48 @@ impl Groups {
     }
 }
 
-/// The touch cost of a lattice over `set` of `reference` at `theta`, and its gradient by each
-/// group; `responder` is the lattice's (any parameters: it is refactorised here).
+/// The touch cost of a lattice over `set` of `reference` at `theta` (one value per group of the
+/// responder's stiffness), and its gradient by each group; `responder` is the lattice's (any
+/// parameters: it is refactorised here).
 pub fn touch_cost(
     reference: &Reference,
     set: Set,
     responder: &mut Responder,
-    theta: &[f64; 7],
-) -> Result<(f64, [f64; 7]), crate::sparse::SparseError> {
+    theta: &[f64],
+) -> Result<(f64, Vec<f64>), crate::sparse::SparseError> {
     let r = responder;
     r.set_theta(theta)?;
-    let (mut cost, mut grad, mut count) = (0.0, [0.0; 7], 0usize);
-    let mut forms = [0.0; 7];
+    let groups = r.stiffness.groups;
+    let (mut cost, mut grad, mut count) = (0.0, vec![0.0; groups], 0usize);
+    let mut forms = vec![0.0; groups];
     for (case, fem) in reference.cases.iter().zip(&reference.answers) {
         if case.set != set {
             continue;
         }
         count += 1;
-        let (answer, probe) = r.answer(case)?;
+        let (answer, sensitivity) = r.answer(case)?;
         let ratio = answer.feel / fem.feel;
         cost += (ratio - 1.0).powi(2);
-        match (&case.load, probe) {
-            (Load::Probe { .. }, Some(p)) => {
-                r.stiffness.group_forms(&p.sensitivity, &answer.u, &mut forms);
-                for g in 0..7 {
-                    grad[g] += 2.0 * (ratio - 1.0) * (-forms[g] / fem.feel);
-                }
-            }
-            _ => {
-                r.stiffness.group_forms(&answer.u, &answer.u, &mut forms);
-                for g in 0..7 {
-                    grad[g] += 2.0 * (ratio - 1.0) * (-forms[g] / fem.feel);
-                }
-                let ref2: f64 = fem.u.iter().map(|v| v * v).sum();
-                let mut adjoint: Vec<f64> = answer.u.iter().zip(&fem.u).map(|(a, b)| a - b).collect();
-                cost += adjoint.iter().map(|v| v * v).sum::<f64>() / ref2;
-                r.solver.solve(&mut adjoint)?;
-                r.stiffness.group_forms(&adjoint, &answer.u, &mut forms);
-                for g in 0..7 {
-                    grad[g] += -2.0 * forms[g] / ref2;
-                }
+        // dr/dtheta_g = -w^T K_g u / feel_fem: w = u for a force load, the probe's adjoint field.
+        let w = sensitivity.as_ref().unwrap_or(&answer.u);
+        r.stiffness.group_forms(w, &answer.u, &mut forms);
+        for g in 0..groups {
+            grad[g] -= 2.0 * (ratio - 1.0) * forms[g] / fem.feel;
+        }
+        if sensitivity.is_none() {
+            // The field error, by one adjoint solve.
+            let ref2: f64 = fem.u.iter().map(|v| v * v).sum();
+            let mut adjoint: Vec<f64> = answer.u.iter().zip(&fem.u).map(|(a, b)| a - b).collect();
+            cost += adjoint.iter().map(|v| v * v).sum::<f64>() / ref2;
+            r.solver.solve(&mut adjoint)?;
+            r.stiffness.group_forms(&adjoint, &answer.u, &mut forms);
+            for g in 0..groups {
+                grad[g] -= 2.0 * forms[g] / ref2;
             }
         }
     }
     let n = count.max(1) as f64;
-    Ok((cost / n, grad.map(|g| g / n)))
+    Ok((cost / n, grad.into_iter().map(|g| g / n).collect()))
 }
 
 /// A lattice's responder for the touch cost (factorised at unit parameters).

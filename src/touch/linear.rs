@@ -7,6 +7,7 @@
 
 use crate::fem::FemModel;
 use crate::grid::{Grid, SpringFamily};
+use crate::msm::model::Spring;
 use crate::msm::{MsmModel, MsmParams, Topology};
 use crate::sparse::{SparseError, SpdSystem};
 
@@ -64,13 +65,24 @@ impl GroupedStiffness {
     /// The rest tangent of a spring lattice of `topology` on `grid`, per stiffness group: each
     /// spring adds `k d d^T` (unit direction `d` at rest) to its end nodes' blocks.
     pub fn lattice(grid: Grid, topology: Topology) -> Self {
-        let ones = MsmParams::unit(topology);
+        Self::lattice_grouped(grid, topology, 7, |_, family| group_of(family))
+    }
+
+    /// [`GroupedStiffness::lattice`] with `groups` groups, spring `s` of `family` in group
+    /// `group(s, family)` (its stiffness at 1 N/m times its element share).
+    pub fn lattice_grouped(
+        grid: Grid,
+        topology: Topology,
+        groups: usize,
+        group: impl Fn(&Spring, SpringFamily) -> usize,
+    ) -> Self {
         // Unit parameters are valid, so the model always builds.
-        let model = MsmModel::new(grid, ones, 1.0).unwrap_or_else(|_| unreachable!("unit parameters are valid"));
-        let mut out = Self { entries: Vec::new(), unit: Vec::new(), group: Vec::new(), groups: 7 };
+        let model = MsmModel::new(grid, MsmParams::unit(topology), 1.0)
+            .unwrap_or_else(|_| unreachable!("unit parameters are valid"));
+        let mut out = Self { entries: Vec::new(), unit: Vec::new(), group: Vec::new(), groups };
         for s in model.springs() {
             let fam = model.families[s.family].family;
-            let g = group_of(fam) as u8;
+            let g = group(&s, fam) as u8;
             let o = fam.offset.map(f64::from);
             let len = (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt();
             let d = o.map(|c| c / len);
@@ -142,11 +154,16 @@ pub struct ProbeAnswer {
     pub force: [f64; 3],
     /// Contact nodes and their contact force along the outward normal, newtons.
     pub contacts: Vec<(usize, f64)>,
-    /// The outward normals of the contact nodes (from the sphere's centre).
-    pub normals: Vec<[f64; 3]>,
     /// The field `w` with `d|force| = -w^T dK u` for a change `dK` of the stiffness (the
     /// contact set held): the adjoint of the probe force.
     pub sensitivity: Vec<f64>,
+}
+
+impl ProbeAnswer {
+    /// The magnitude of the force on the probe, newtons.
+    pub fn force_n(&self) -> f64 {
+        self.force.iter().map(|c| c * c).sum::<f64>().sqrt()
+    }
 }
 
 /// Active-set iterations of the contact solve.
@@ -256,8 +273,7 @@ impl SceneSolver {
             }
         }
         let sensitivity = probe_sensitivity(&force, &solved, &geometry, &columns, chol.as_ref(), 3 * nn);
-        let normals = solved.iter().map(|&p| geometry[p].0).collect();
-        Ok(ProbeAnswer { u, force, contacts: solved.into_iter().zip(lambda).collect(), normals, sensitivity })
+        Ok(ProbeAnswer { u, force, contacts: solved.into_iter().zip(lambda).collect(), sensitivity })
     }
 }
 

@@ -43,11 +43,9 @@ impl Responder {
         self.solver.factor(&self.stiffness, theta)
     }
 
-    /// The answer to `case`, with the probe's contact details where it is one.
-    pub fn answer(
-        &mut self,
-        case: &TouchCase,
-    ) -> Result<(Answer, Option<super::linear::ProbeAnswer>), crate::sparse::SparseError> {
+    /// The answer to `case`, and for a probe case the adjoint field of its force
+    /// ([`super::linear::ProbeAnswer::sensitivity`]).
+    pub fn answer(&mut self, case: &TouchCase) -> Result<(Answer, Option<Vec<f64>>), crate::sparse::SparseError> {
         match &case.load {
             Load::Forces(f) => {
                 let mut u = f.clone();
@@ -57,9 +55,9 @@ impl Responder {
             }
             Load::Probe { centre } => {
                 let p = self.solver.probe(&self.grid, *centre, PROBE_RADIUS_M)?;
-                let feel = p.force.iter().map(|c| c * c).sum::<f64>().sqrt();
-                let answer = Answer { u: p.u.clone(), feel, contacts: p.contacts.iter().map(|c| c.0).collect() };
-                Ok((answer, Some(p)))
+                let feel = p.force_n();
+                let answer = Answer { u: p.u, feel, contacts: p.contacts.iter().map(|c| c.0).collect() };
+                Ok((answer, Some(p.sensitivity)))
             }
         }
     }
