@@ -23,7 +23,7 @@ pub mod viewer;
 pub mod worker;
 
 /// The headless commands, named when there is no display.
-pub const HEADLESS_HINT: &str = "headless commands: render, simulate, fem, msm, errors, calibrate, reproduce, chart, choose, bench \
+pub const HEADLESS_HINT: &str = "headless commands: render, simulate, fem, msm, errors, validate, calibrate, reproduce, chart, choose, bench \
                                  (tissue-sim --help)";
 
 /// True when an X11 or Wayland display is configured.
