@@ -234,8 +234,12 @@ pub enum Command {
     /// the viewer's user touches the cube (face z = 0 clamped; point loads, top-face shear, the
     /// probe), on training and held-out validation cases.
     Validate {
-        #[command(flatten)]
-        object: ObjectArgs,
+        /// The paper's object: A or B (with --material, the label of the report).
+        #[arg(long, value_parser = ["A", "B"], ignore_case = true)]
+        object: Option<String>,
+        /// A material file (TOML, or JSON by extension) in place of the object's constants.
+        #[arg(long)]
+        material: Option<PathBuf>,
         #[command(flatten)]
         grid: GridArgs,
         /// A calibration result (JSON with `params`); default: the viewer's default tissue.
@@ -426,6 +430,22 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Writes `text` and a newline to standard output ([`say_raw`]).
+fn say(text: &str) -> anyhow::Result<()> {
+    say_raw(&format!("{text}\n"))
+}
+
+/// Writes `text` to standard output; a reader that has gone away (a closed pipe, as with
+/// `| head`) ends the output quietly instead of failing.
+fn say_raw(text: &str) -> anyhow::Result<()> {
+    use std::io::Write as _;
+    let mut stdout = std::io::stdout().lock();
+    match stdout.write_all(text.as_bytes()).and_then(|()| stdout.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
+}
+
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
@@ -446,7 +466,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Calibrate(args)) => calibrate_command(args),
         Some(Command::Reproduce { out, seeds, no_shear }) => {
             crate::reproduce::run(&out, &crate::reproduce::Options { seeds, shear: !no_shear })?;
-            println!("wrote {}", out.join("report.md").display());
+            say(&format!("wrote {}", out.join("report.md").display()))?;
             Ok(())
         }
         Some(Command::Render { out, width, height, case, colour, model, magnify }) => {
@@ -455,7 +475,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Chart { out, objects, resolutions, no_stability }) => {
             let opts = chart_options(objects, resolutions)?;
             let points = crate::study::write_chart(&out, &opts, !no_stability, &mut |m| eprintln!("{m}"))?;
-            println!("wrote {} points and chart.md to {}", points.len(), out.display());
+            say(&format!("wrote {} points and chart.md to {}", points.len(), out.display()))?;
             Ok(())
         }
         Some(Command::Choose { max_force_error, max_error, rate, object, metric, chart }) => {
@@ -467,15 +487,21 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             };
             choose_command(&budget, object, chart)
         }
-        Some(Command::Validate { object, grid, params, model, json }) => {
-            validate_command(&object, &grid, params, model.as_deref(), json)
+        Some(Command::Validate { object, material, grid, params, model, json }) => {
+            let label = object.as_ref().map(|o| o.to_ascii_uppercase());
+            // A material file replaces the object's constants; the object then only labels the report.
+            let object = match material {
+                Some(path) => ObjectArgs { object: None, material: Some(path) },
+                None => ObjectArgs { object, material: None },
+            };
+            validate_command(&object, label, &grid, params, model.as_deref(), json)
         }
         Some(Command::Bench { json }) => {
             let report = crate::bench::run()?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                say(&serde_json::to_string_pretty(&report)?)?;
             } else {
-                print!("{}", report.to_text());
+                say_raw(&report.to_text())?;
             }
             Ok(())
         }
@@ -568,7 +594,7 @@ fn choose_command(budget: &crate::study::choose::Budget, object: String, chart: 
         bail!("the chart has no points for object {object}");
     }
     let choice = crate::study::choose::choose(&points, &object, budget);
-    println!("{}", choice.explanation);
+    say(&choice.explanation)?;
     if choice.chosen.is_none() {
         bail!("no model meets the budget");
     }
@@ -644,7 +670,7 @@ fn render_command(
     let scene = crate::scene::StaticScene::new(case.as_deref(), model, colour, magnify)?;
     let png = scene.render_png(width, height)?;
     write_atomic(&out, &png.bytes)?;
-    println!("wrote {} ({}x{}, adapter: {} / {:?})", out.display(), width, height, png.adapter, png.backend);
+    say(&format!("wrote {} ({}x{}, adapter: {} / {:?})", out.display(), width, height, png.adapter, png.backend))?;
     Ok(())
 }
 
@@ -675,6 +701,7 @@ fn errors_inputs(
 /// `validate`: the touch benchmark of one model.
 fn validate_command(
     object: &ObjectArgs,
+    label: Option<String>,
     grid: &GridArgs,
     params: Option<PathBuf>,
     model: Option<&str>,
@@ -700,12 +727,15 @@ fn validate_command(
     };
     check_solver_size("validate", Bc::Clamped, grid.n())?;
     let reference = crate::touch::Reference::new(&material, grid)?;
-    let report = crate::touch::score::evaluate(&reference, &material, &model)
+    let mut report = crate::touch::score::evaluate(&reference, &material, &model)
         .with_context(|| format!("scoring {} of material {}", model.name(), material.name))?;
+    if let Some(label) = label {
+        report.object = label;
+    }
     if json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        say(&serde_json::to_string_pretty(&report)?)?;
     } else {
-        print!("{}", report.to_text());
+        say_raw(&report.to_text())?;
     }
     Ok(())
 }
@@ -805,10 +835,10 @@ fn errors(material: &Material, params: MsmParams, grid: Grid, json: bool) -> any
             "cost": total,
             "cases": errs,
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        say(&serde_json::to_string_pretty(&v)?)?;
     } else {
         let title = format!("Object {} ({:?} MSM, cost {total:.6e} m)", material.name, params.topology());
-        print!("{}", format_table(&title, &errs));
+        say_raw(&format_table(&title, &errs))?;
     }
     Ok(())
 }

@@ -445,6 +445,20 @@ fn validate_prints_the_touch_benchmark_contract() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
     assert_eq!(v["model"], "fem-corotational");
     assert!(v["worst_force_error"].as_f64().expect("number") < 1e-9);
+    // A material file with the object as its label, as the issue writes the command.
+    let o = run(&[
+        "validate",
+        "--object",
+        "A",
+        "--material",
+        "assets/examples/my_tissue.toml",
+        "--model",
+        "fem-linear",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(v["object"], "A");
     let o = run(&["validate", "--object", "A", "--params", "assets/tissue_A_axis.json"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("no shear stiffness"), "{}", stderr(&o));
