@@ -189,7 +189,7 @@ impl Problem {
 
     /// The static objective over the training cases of [`Problem::case_set`]: the paper's cost
     /// (metres), the touch cost (dimensionless, [`crate::touch::fit`]), or for both the touch
-    /// cost plus the paper's cost relative to [`Problem::paper_scale`].
+    /// cost plus the paper's cost relative to the FEM's summed nodal displacements.
     pub fn objective(&self, params: &MsmParams, ws: &mut Workspace) -> Result<f64, CostError> {
         match self.case_set {
             super::CaseSet::Paper => self.cost(params, ws),
