@@ -16,6 +16,7 @@ use crate::io::{CaseRecord, DisplacementFile, read_json, write_atomic, write_jso
 use crate::material::Material;
 use crate::msm::{MsmModel, MsmParams, Topology, statics};
 use crate::scene::ColourMode;
+use crate::sim::Integrator;
 use crate::study::choose::Metric;
 
 /// Implements [`clap::ValueEnum`] for a core enum, so that clap stays in the command-line layer:
@@ -73,6 +74,11 @@ value_enum!(ColourMode {
     None => "none", "Plain shading";
     Displacement => "displacement", "Displacement magnitude";
     Error => "error", "Distance between the MSM and the FEM answer of the case";
+});
+value_enum!(Integrator {
+    Symplectic => "symplectic", "Symplectic (semi-implicit) Euler: cheap, stable below a critical time step";
+    Implicit => "implicit", "Linearised backward Euler with the tangent of every step (lattices only)";
+    Prefactored => "prefactored", "Linearised backward Euler with the rest tangent factorised once";
 });
 value_enum!(Metric {
     Max => "max", "The worst node (the default: a budget holds everywhere)";
@@ -173,6 +179,14 @@ pub enum Command {
         /// against the fine FEM.
         #[arg(long = "max-error", value_name = "PCT", allow_hyphen_values = true)]
         max_error: Option<f64>,
+        /// Dynamic budget: the largest error of the fundamental's period (the integrator's,
+        /// measured by time stepping against the model's own mode), percent.
+        #[arg(long = "max-period-error", value_name = "PCT", allow_hyphen_values = true)]
+        max_period_error: Option<f64>,
+        /// Dynamic budget: the largest error of the fundamental's damping ratio, percent of
+        /// critical.
+        #[arg(long = "max-damping-error", value_name = "PCT", allow_hyphen_values = true)]
+        max_damping_error: Option<f64>,
         /// Real-time step rate the model must keep up with, Hz (1 kHz: haptics).
         #[arg(long, default_value_t = 1000.0, allow_hyphen_values = true)]
         rate: f64,
@@ -249,6 +263,33 @@ pub enum Command {
         #[arg(long, value_parser = ["fem-linear", "fem-corotational"])]
         model: Option<String>,
         /// Print JSON (the benchmark's contract) instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Dynamic accuracy of one model, integrator and step on the viewer's scene (face z = 0
+    /// clamped): the fundamental's period and damping measured by time stepping (release from its
+    /// static shape) against the model's own modal values and the FEM's, and the trajectory error
+    /// against the FEM's converged transients (a top-face step load and its release).
+    Dynamics {
+        /// The paper's object: A or B.
+        #[arg(long, value_parser = ["A", "B"], ignore_case = true)]
+        object: String,
+        /// A calibration result (JSON with `params`); default: the viewer's default tissue.
+        #[arg(long, value_name = "FILE.json", conflicts_with = "model")]
+        params: Option<PathBuf>,
+        /// The model: a lattice with its shipped tissue, or the FEM.
+        #[arg(long, value_parser = ["hex", "shear", "axis", "fem-linear", "fem-corotational"])]
+        model: Option<String>,
+        /// Integrator; default: the viewer's automatic choice for --dt (its dynamic budget).
+        #[arg(long, value_enum)]
+        integrator: Option<Integrator>,
+        /// Time step, s (default: the viewer's, 1e-4).
+        #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
+        dt: f64,
+        /// Damping ratio at the fundamental (mass-proportional).
+        #[arg(long, default_value_t = crate::dynamic::damping::DEFAULT_DAMPING_RATIO, allow_hyphen_values = true)]
+        damping_ratio: f64,
+        /// Print JSON (the contract) instead of text.
         #[arg(long)]
         json: bool,
     },
@@ -478,12 +519,23 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             say(&format!("wrote {} points and chart.md to {}", points.len(), out.display()))?;
             Ok(())
         }
-        Some(Command::Choose { max_force_error, max_error, rate, object, metric, chart }) => {
+        Some(Command::Choose {
+            max_force_error,
+            max_error,
+            max_period_error,
+            max_damping_error,
+            rate,
+            object,
+            metric,
+            chart,
+        }) => {
             let budget = crate::study::choose::Budget {
                 max_force_error_pct: max_force_error,
                 max_error_pct: max_error,
                 metric,
                 rate_hz: rate,
+                max_period_error_pct: max_period_error,
+                max_damping_error_pct: max_damping_error,
             };
             choose_command(&budget, object, chart)
         }
@@ -495,6 +547,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 None => ObjectArgs { object, material: None },
             };
             validate_command(&object, label, &grid, params, model.as_deref(), json)
+        }
+        Some(Command::Dynamics { object, params, model, integrator, dt, damping_ratio, json }) => {
+            dynamics_command(&object, params, model.as_deref(), integrator, dt, damping_ratio, json)
         }
         Some(Command::Bench { json }) => {
             let report = crate::bench::run()?;
@@ -574,10 +629,16 @@ fn choose_command(budget: &crate::study::choose::Budget, object: String, chart: 
     if !(f.is_finite() && f > 0.0) {
         bail!("--max-force-error must be a positive percentage, got {f}");
     }
-    if let Some(max_error) = budget.max_error_pct
-        && !(max_error.is_finite() && max_error > 0.0)
-    {
-        bail!("--max-error must be a positive percentage, got {max_error}");
+    for (flag, value) in [
+        ("--max-error", budget.max_error_pct),
+        ("--max-period-error", budget.max_period_error_pct),
+        ("--max-damping-error", budget.max_damping_error_pct),
+    ] {
+        if let Some(v) = value
+            && !(v.is_finite() && v > 0.0)
+        {
+            bail!("{flag} must be a positive percentage, got {v}");
+        }
     }
     if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
         bail!("--rate must be a positive rate in Hz (at most 1e7), got {rate}");
@@ -738,6 +799,110 @@ fn validate_command(
         say_raw(&report.to_text())?;
     }
     Ok(())
+}
+
+/// `dynamics`: one model, integrator and step measured against the FEM's dynamic reference.
+fn dynamics_command(
+    object: &str,
+    params: Option<PathBuf>,
+    model: Option<&str>,
+    integrator: Option<Integrator>,
+    dt: f64,
+    zeta: f64,
+    json: bool,
+) -> anyhow::Result<()> {
+    use crate::sim::ModelChoice;
+    if !(dt.is_finite() && (1e-6..=0.05).contains(&dt)) {
+        anyhow::bail!("--dt {} is out of range: a time step from 1e-6 to 0.05 s", crate::io::num(dt));
+    }
+    let zeta = crate::dynamic::damping::check_ratio(zeta).map_err(|e| anyhow::anyhow!("--damping-ratio: {e}"))?;
+    let object_args = ObjectArgs { object: Some(object.to_ascii_uppercase()), material: None };
+    let (material, choice, p) = match (params, model) {
+        (Some(path), _) => {
+            let (material, p) = errors_inputs(&object_args, &ParamArgs::default(), Some(path))?;
+            (material, ModelChoice::Lattice(p.topology()), Some(p))
+        }
+        (None, name) => {
+            let material = object_args.material(None)?;
+            let choice = match name {
+                Some(n) => ModelChoice::try_from(n.to_owned()).map_err(|e| anyhow::anyhow!("{e}"))?,
+                None => ModelChoice::Lattice(crate::tissue::DEFAULT_TOPOLOGY),
+            };
+            (material, choice, None)
+        }
+    };
+    if !choice.takes_damping_ratio() {
+        anyhow::bail!("dynamics: {}", crate::dynamic::modal::AXIS_HAS_NO_MODES);
+    }
+    // The viewer's policy picks the integrator and step (or checks the one asked for).
+    let tissue = choice.build(&material, p, zeta)?;
+    let (integrator, dt, note) = crate::sim::choose_step(
+        integrator,
+        dt,
+        tissue.explicit_dt_limit(),
+        tissue.damping(),
+        crate::sim::DEFAULT_DYNAMIC_BUDGET,
+    )
+    .map_err(|e| anyhow::anyhow!("dynamics: {e}; lower --dt or choose --integrator prefactored"))?;
+    if matches!(choice, ModelChoice::Fem(_)) && integrator == crate::sim::Integrator::Implicit {
+        anyhow::bail!("dynamics: the FEM models step with symplectic or prefactored implicit Euler, not implicit");
+    }
+    let refs = crate::dynamic::measure::References::new(&material, zeta)?;
+    let config = crate::dynamic::measure::Configuration { model: choice, params: p, integrator, dt };
+    let report = crate::dynamic::measure::measure(&refs, config)
+        .with_context(|| format!("measuring {} with {} at dt = {} s", choice.name(), integrator.name(), dt))?;
+    if json {
+        say(&serde_json::to_string_pretty(&report)?)?;
+    } else {
+        say_raw(&dynamics_text(&report, note.as_deref()))?;
+    }
+    Ok(())
+}
+
+fn dynamics_text(r: &crate::dynamic::measure::DynamicReport, note: Option<&str>) -> String {
+    let mut t = format!(
+        "Dynamics: object {}, model {}, {} at dt = {} s, damping ratio {} at the fundamental (mass-proportional); \
+         viewer scene (face z = 0 clamped)\n",
+        r.object,
+        r.model,
+        r.integrator,
+        crate::io::num(r.dt_s),
+        r.damping_ratio_set
+    );
+    if let Some(n) = note {
+        t += &format!("note: {n}\n");
+    }
+    t += &format!(
+        "fundamental period: measured {:.4} ms, own modal {:.4} ms (error {:.3} %), FEM {:.4} ms (error {:.3} %)\n",
+        1e3 * r.measured_period_s,
+        1e3 * r.modal_period_s,
+        100.0 * r.period_error,
+        1e3 * r.fem_period_s,
+        100.0 * r.fem_period_error
+    );
+    t += &format!(
+        "damping ratio: measured {:.4}, set {:.4} (error {:.3} % of critical)\n",
+        r.measured_damping_ratio,
+        r.damping_ratio_set,
+        100.0 * r.damping_error
+    );
+    if let Some(p) = r.predicted {
+        t += &format!(
+            "closed form of {} on the fundamental: period {:.4} ms, damping ratio {:.4}\n",
+            r.integrator,
+            1e3 * p.period_s,
+            p.damping_ratio
+        );
+    }
+    for e in &r.transients {
+        t += &format!(
+            "trajectory error, {}: {:.3} % (FEM reference: Newmark, converged at {} s)\n",
+            e.transient.name(),
+            100.0 * e.error,
+            crate::io::num(e.reference_step_s)
+        );
+    }
+    t
 }
 
 /// A progress bar on a terminal (hidden otherwise) counting `len` `unit`.

@@ -24,6 +24,7 @@ pub mod bench;
 pub mod calibrate;
 pub mod cases;
 pub mod cli;
+pub mod dynamic;
 pub mod fem;
 pub mod grid;
 pub mod io;

@@ -4,7 +4,7 @@
 //!
 //! ```json
 //! { "object": "A", "model": "hex", "dt": 1e-4, "integrator": "symplectic",
-//!   "clamp": "bottom",
+//!   "damping_ratio": 0.2, "clamp": "bottom",
 //!   "actions": [
 //!     { "drag":    { "node": 511, "to": [0.11, 0.1, 0.1], "duration_s": 0.2 } },
 //!     { "release": {} },
@@ -12,7 +12,9 @@
 //!                    "depth": 0.004, "duration_s": 0.2, "samples": 8 } },
 //!     { "wait":    { "duration_s": 0.5 } } ] }
 //! ```
-//! `clamp` is `bottom` (face z = 0 held, the viewer's default), `none`, or a case id such as
+//! `damping_ratio` is the ratio at the fundamental (mass-proportional, see
+//! [`crate::dynamic::damping`]; default 0.2; not for the axis lattice, which keeps the paper's
+//! nodal `d`). `clamp` is `bottom` (face z = 0 held, the viewer's default), `none`, or a case id such as
 //! `A_clamped_ax1_F10` (its fixed face and loads). A drag moves its target linearly from the
 //! node's position to `to` over `duration_s` and holds it there until `release`; a probe starts
 //! touching `at` and is pushed along `direction` to `depth` over `duration_s`, recording the
@@ -47,6 +49,9 @@ pub struct Script {
     pub dt: f64,
     /// Integrator (default: symplectic when safe for `dt`, implicit otherwise).
     pub integrator: Option<Integrator>,
+    /// Damping ratio at the fundamental (default [`crate::dynamic::damping::DEFAULT_DAMPING_RATIO`]);
+    /// the paper's axis lattice keeps its nodal `d` and refuses one.
+    pub damping_ratio: Option<f64>,
     /// `bottom`, `none` or a case id (default `bottom`).
     #[serde(default = "default_clamp")]
     pub clamp: String,
@@ -242,7 +247,14 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     let material = Material::preset(&script.object)
         .ok_or_else(|| anyhow::anyhow!("script: object must be A or B, got {:?}", script.object))?;
     check_bounds(script)?;
-    let tissue = script.model.build(&material, None)?;
+    if script.damping_ratio.is_some() && !script.model.takes_damping_ratio() {
+        anyhow::bail!(
+            "script: \"damping_ratio\" is not for the axis lattice: {}",
+            crate::dynamic::modal::AXIS_HAS_NO_MODES
+        );
+    }
+    let zeta = script.damping_ratio.unwrap_or(crate::dynamic::damping::DEFAULT_DAMPING_RATIO);
+    let tissue = script.model.build(&material, None, zeta).map_err(|e| anyhow::anyhow!("script: {e:#}"))?;
     let integrator = choose_integrator(script.integrator, script.dt, tissue.explicit_dt_limit()).map_err(|why| {
         anyhow::anyhow!("script: {why}; lower dt, or choose \"integrator\": \"prefactored\" (or leave it out)")
     })?;

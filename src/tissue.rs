@@ -55,13 +55,6 @@ pub fn default_params(material: &Material) -> anyhow::Result<MsmParams> {
     tissue_params(material, DEFAULT_TOPOLOGY)
 }
 
-/// The FEM's damping: the default tissue's nodal `d` as a mass-proportional rate `alpha`
-/// (1/s, `C = alpha M`), `d` over the mean node mass of the paper's grid.
-pub fn fem_damping_rate(material: &Material) -> anyhow::Result<f64> {
-    let node_mass = material.density * crate::grid::CUBE_SIDE_M.powi(3) / crate::grid::Grid::paper().num_nodes() as f64;
-    Ok(default_params(material)?.d / node_mass)
-}
-
 /// The shipped tissue of object `A` or `B` for `topology`: the shear and hex lattices calibrated
 /// on the touch benchmark's training cases, the axis lattice on the paper's cases (hybrid GA+SA,
 /// seed 1, static cost, then the L-BFGS polish; see each file's `note`).

@@ -200,14 +200,22 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     let o = run(&["chart", "--out", out_s, "--objects", "A", "--resolutions", "4,8", "--no-stability"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("chart.csv")).expect("chart.csv");
-    // 4 charted models (not the paper's axis lattice) x 2 resolutions x 2 integrators, plus the header.
-    assert_eq!(csv.lines().count(), 17, "{csv}");
+    // 4 charted models (not the paper's axis lattice) x 2 resolutions x (1 explicit + 6 implicit
+    // steps), plus the header.
+    assert_eq!(csv.lines().count(), 57, "{csv}");
     assert!(!csv.contains("msm-axis"), "the axis lattice has no held-out score");
     let header = csv.lines().next().expect("header");
     assert!(header.contains("avg_err_pct") && header.contains("force_err_pct"), "{header}");
     // Touch force errors at the viewer's 8^3 scene only.
     let points = tissue_sim::study::read_chart_csv(&out).expect("reads back");
     assert!(points.iter().all(|p| (p.n == 8) != p.force_err_pct.is_nan()), "{csv}");
+    // Dynamic errors too, and the cost per simulated second is the step's time over its step.
+    assert!(points.iter().all(|p| (p.n == 8) != p.dyn_err_pct.is_nan() && (p.n == 8) != p.period_err_pct.is_nan()));
+    assert!(points.iter().all(|p| (p.cost_per_sim_s / (p.step_s / p.dt_s) - 1.0).abs() < 1e-12));
+    assert!(points.iter().any(|p| p.pareto_dynamic), "a dynamic Pareto front is marked");
+    assert!(std::fs::read_to_string(out.join("chart_dynamic.svg")).expect("svg").contains("<svg"));
+    let md = std::fs::read_to_string(out.join("chart.md")).expect("md");
+    assert!(md.contains("Where the dynamic error crosses 5 %"), "{md}");
     assert!(csv.contains(",true"), "a Pareto front is marked");
     assert!(std::fs::read_to_string(out.join("chart.svg")).expect("svg").contains("<svg"));
     let chart = out.join("chart.csv");
@@ -216,6 +224,13 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("Chosen:"), "{text}");
+    // Dynamic budgets beside the static one.
+    let o =
+        run(&["choose", "--chart", chart_s, "--max-period-error", "2", "--max-damping-error", "1", "--rate", "1000"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("period error <= 2 %") && text.contains("damping ratio error <= 1 % of critical"), "{text}");
+    let o = run(&["choose", "--chart", chart_s, "--max-damping-error", "0"]);
+    assert!(!o.status.success() && stderr(&o).contains("--max-damping-error"), "{}", stderr(&o));
     // An impossible budget: a clear message and a non-zero exit.
     let o = run(&["choose", "--chart", chart_s, "--max-error", "0.00001"]);
     assert!(!o.status.success());
@@ -377,8 +392,9 @@ fn chart_files_are_checked_and_an_interrupted_chart_leaves_no_directory() {
     let bad = dir.path().join("bad.csv");
     std::fs::write(
         &bad,
-        "object,model,n,integrator,step_s,dt_max_s,static_s,memory_bytes,avg_err_pct,max_err_pct,force_err_pct,pareto\n\
-         A,msm-hex,4,explicit,-7,1e-3,1e-3,100,0.5,1.0,NaN,true\n",
+        "object,model,n,integrator,step_s,dt_max_s,dt_s,cost_per_sim_s,static_s,memory_bytes,avg_err_pct,max_err_pct,\
+         force_err_pct,dyn_err_pct,period_err_pct,damping_err_pct,pareto,pareto_dynamic\n\
+         A,msm-hex,4,explicit,-7,1e-3,9e-4,1e-3,1e-3,100,0.5,1.0,NaN,NaN,NaN,NaN,true,false\n",
     )
     .expect("write");
     let o = run(&["choose", "--chart", bad.to_str().expect("utf8"), "--max-error", "5"]);
@@ -507,4 +523,60 @@ fn calibrate_on_touch_cases_polishes_and_the_stiffness_fit_runs() {
         out.to_str().expect("utf8"),
     ]);
     assert!(!o.status.success() && stderr(&o).contains("no shear stiffness"), "{}", stderr(&o));
+}
+
+#[test]
+fn dynamics_prints_the_contract_and_refuses_bad_input() {
+    let o = run(&[
+        "dynamics",
+        "--object",
+        "B",
+        "--model",
+        "fem-linear",
+        "--integrator",
+        "prefactored",
+        "--dt",
+        "1e-3",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    for key in [
+        "model",
+        "integrator",
+        "dt_s",
+        "damping_ratio_set",
+        "modal_period_s",
+        "fem_period_s",
+        "measured_period_s",
+        "measured_damping_ratio",
+        "trajectory_error",
+    ] {
+        assert!(!v[key].is_null(), "key {key} missing: {v}");
+    }
+    assert_eq!(v["model"], "fem-linear");
+    assert_eq!(v["integrator"], "prefactored");
+    assert_eq!(v["dt_s"], 1e-3);
+    assert_eq!(v["damping_ratio_set"], 0.2);
+    // The linear FEM is the reference's own model: same fundamental; backward Euler at 1 ms
+    // adds numerical damping (about 3 % of critical at B's fundamental).
+    assert_eq!(v["modal_period_s"], v["fem_period_s"]);
+    let zeta = v["measured_damping_ratio"].as_f64().expect("ratio");
+    assert!(zeta > 0.22 && zeta < 0.26, "{v}");
+    // Defaults: the viewer's tissue, integrator and step; text output.
+    let o = run(&["dynamics", "--object", "A"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("model hex, symplectic at dt = 0.0001 s"), "{text}");
+    for (bad, why) in [
+        (vec!["dynamics", "--object", "A", "--model", "axis"], "nodal damping d"),
+        (vec!["dynamics", "--object", "A", "--dt", "0"], "--dt"),
+        (vec!["dynamics", "--object", "A", "--damping-ratio", "-1"], "damping ratio"),
+        (vec!["dynamics", "--object", "A", "--integrator", "symplectic", "--dt", "0.01"], "stability limit"),
+        (vec!["dynamics", "--object", "A", "--model", "fem-linear", "--integrator", "implicit"], "not implicit"),
+    ] {
+        let o = run(&bad);
+        assert_eq!(o.status.code(), Some(1), "{bad:?}");
+        assert!(stderr(&o).contains(why), "{bad:?}: {}", stderr(&o));
+    }
 }

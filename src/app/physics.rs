@@ -44,6 +44,8 @@ pub enum Command {
     SetParams(MsmParams),
     /// Integrator asked for (`None`: automatic) and time step; the simulation's policy decides.
     SetIntegrator(Option<Integrator>, f64),
+    /// The damping ratio at the fundamental (the policy then decides again).
+    SetDampingRatio(f64),
     /// The active tool.
     SetTool(Tool),
     /// Clamp and load as a case, keeping the state.
@@ -88,6 +90,10 @@ pub struct Published {
     pub integrator: Option<(Integrator, f64)>,
     /// The explicit stability limit of the running model, s.
     pub dt_limit: f64,
+    /// How the running model is damped.
+    pub damping: Option<crate::dynamic::damping::Damping>,
+    /// The dynamic budget of the automatic choice.
+    pub budget: Option<crate::sim::DynamicBudget>,
     /// The running model's parameters.
     pub params: Option<MsmParams>,
     /// Whether anything moves (a tool is active or a node is not at rest): the UI redraws then.
@@ -178,6 +184,7 @@ impl PhysicsThread {
             }
             into.integrator = p.integrator;
             into.dt_limit = p.dt_limit;
+            (into.damping, into.budget) = (p.damping, p.budget);
             into.params = p.params;
             into.moving = p.moving;
             into.tool_commands = p.tool_commands;
@@ -205,6 +212,10 @@ impl Loop {
                 Err(e) => self.note = Some(format!("parameters refused: {e}")),
             },
             Command::SetIntegrator(i, dt) => self.note = sim.set_integrator(i, dt),
+            Command::SetDampingRatio(zeta) => match sim.set_damping_ratio(zeta) {
+                Ok(note) => self.note = note,
+                Err(e) => self.note = Some(format!("damping ratio refused: {e}")),
+            },
             Command::SetTool(t) => {
                 sim.tool = t;
                 self.tools += 1;
@@ -249,6 +260,8 @@ fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop,
         }
         p.integrator = Some((sim.integrator, sim.dt));
         p.dt_limit = sim.dt_limit();
+        p.damping = Some(sim.tissue.damping());
+        p.budget = Some(sim.budget);
         p.params = sim.tissue.params();
         p.moving = !state.paused && (sim.tool != Tool::None || sim.tissue.kinetic_energy() > 1e-12);
         p.tool_commands = state.tools;

@@ -90,6 +90,8 @@ pub struct Shown {
     pub integrator: Option<Integrator>,
     /// Time step asked for, s.
     pub dt: f64,
+    /// Damping ratio at the fundamental (all models but the paper's axis lattice).
+    pub damping_ratio: f64,
     /// The applied load case, if any.
     pub case_active: Option<LoadCase>,
     /// Its FEM answer, once solved.

@@ -29,6 +29,9 @@ pub struct StudyPanel {
     max_error: f64,
     max_force_error: f64,
     bound_static: bool,
+    /// Dynamic budgets (period %, damping % of critical), bounded when `bound_dynamic`.
+    dynamic: (f64, f64),
+    bound_dynamic: bool,
     rate: f64,
     metric: Metric,
     choice: Option<Choice>,
@@ -44,6 +47,11 @@ impl Default for StudyPanel {
             max_error: 1.5,
             max_force_error: 7.0,
             bound_static: false,
+            dynamic: (
+                100.0 * crate::sim::DEFAULT_DYNAMIC_BUDGET.period,
+                100.0 * crate::sim::DEFAULT_DYNAMIC_BUDGET.damping,
+            ),
+            bound_dynamic: true,
             rate: 1000.0,
             metric: Metric::Max,
             choice: None,
@@ -52,6 +60,35 @@ impl Default for StudyPanel {
 }
 
 impl StudyPanel {
+    /// The accuracy budgets: touch force, the paper's cases, dynamics.
+    fn budget_rows(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.label("touch force budget");
+            ui.add(egui::DragValue::new(&mut self.max_force_error).speed(0.1).range(0.1..=100.0).suffix(" %"));
+        });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.bound_static, "paper cases too");
+            ui.add_enabled(
+                self.bound_static,
+                egui::DragValue::new(&mut self.max_error).speed(0.01).range(0.001..=100.0).suffix(" % of h"),
+            );
+            ui.selectable_value(&mut self.metric, Metric::Max, "max");
+            ui.selectable_value(&mut self.metric, Metric::Avg, "avg");
+        });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.bound_dynamic, "dynamics: period");
+            ui.add_enabled(
+                self.bound_dynamic,
+                egui::DragValue::new(&mut self.dynamic.0).speed(0.1).range(0.01..=100.0).suffix(" %"),
+            );
+            ui.label("damping");
+            ui.add_enabled(
+                self.bound_dynamic,
+                egui::DragValue::new(&mut self.dynamic.1).speed(0.1).range(0.01..=100.0).suffix(" % of critical"),
+            );
+        });
+    }
+
     /// Draws the section for `object`; `wake` repaints the UI from the worker thread.
     pub fn ui(&mut self, ui: &mut egui::Ui, object: &str, wake: impl Fn() + Send + Sync + 'static) {
         self.poll();
@@ -88,19 +125,7 @@ impl StudyPanel {
             return;
         }
         speed_accuracy_plot(ui, &mine);
-        ui.horizontal(|ui| {
-            ui.label("touch force budget");
-            ui.add(egui::DragValue::new(&mut self.max_force_error).speed(0.1).range(0.1..=100.0).suffix(" %"));
-        });
-        ui.horizontal(|ui| {
-            ui.checkbox(&mut self.bound_static, "paper cases too");
-            ui.add_enabled(
-                self.bound_static,
-                egui::DragValue::new(&mut self.max_error).speed(0.01).range(0.001..=100.0).suffix(" % of h"),
-            );
-            ui.selectable_value(&mut self.metric, Metric::Max, "max");
-            ui.selectable_value(&mut self.metric, Metric::Avg, "avg");
-        });
+        self.budget_rows(ui);
         ui.horizontal(|ui| {
             ui.label("rate");
             ui.add(egui::DragValue::new(&mut self.rate).speed(10.0).range(1.0..=100_000.0).suffix(" Hz"));
@@ -110,6 +135,8 @@ impl StudyPanel {
                     max_error_pct: self.bound_static.then_some(self.max_error),
                     metric: self.metric,
                     rate_hz: self.rate,
+                    max_period_error_pct: self.bound_dynamic.then_some(self.dynamic.0),
+                    max_damping_error_pct: self.bound_dynamic.then_some(self.dynamic.1),
                 };
                 self.choice = Some(choose(&self.points, object, &budget));
             }
@@ -175,7 +202,7 @@ fn speed_accuracy_plot(ui: &mut egui::Ui, mine: &[&ChartPoint]) {
         .allow_zoom(false)
         .allow_drag(false)
         .legend(Legend::default().position(Corner::LeftBottom).background_alpha(0.6))
-        .x_axis_label("log10 time per step (s); circle explicit, triangle implicit")
+        .x_axis_label("log10 wall time per simulated s; circle explicit, triangle implicit")
         .y_axis_label("log10 avg error (% of h)")
         .show(ui, |plot| {
             for (i, kind) in ModelKind::ALL.iter().enumerate() {
@@ -186,7 +213,7 @@ fn speed_accuracy_plot(ui: &mut egui::Ui, mine: &[&ChartPoint]) {
                     let pts: Vec<[f64; 2]> = mine
                         .iter()
                         .filter(|p| p.model == *kind && p.integrator == integrator)
-                        .map(|p| [p.step_s.log10(), p.avg_err_pct.log10()])
+                        .map(|p| [p.cost_per_sim_s.log10(), p.avg_err_pct.log10()])
                         .collect();
                     plot.points(
                         // One legend entry per model: circles explicit, triangles implicit.
@@ -200,7 +227,7 @@ fn speed_accuracy_plot(ui: &mut egui::Ui, mine: &[&ChartPoint]) {
             // Rings around the Pareto points (a polyline's sharp corners render as spikes
             // without feathering on software adapters).
             let front: Vec<[f64; 2]> =
-                mine.iter().filter(|p| p.pareto).map(|p| [p.step_s.log10(), p.avg_err_pct.log10()]).collect();
+                mine.iter().filter(|p| p.pareto).map(|p| [p.cost_per_sim_s.log10(), p.avg_err_pct.log10()]).collect();
             plot.points(
                 Points::new("Pareto front", PlotPoints::from(front))
                     .shape(MarkerShape::Circle)

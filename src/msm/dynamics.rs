@@ -34,7 +34,8 @@ struct ImplicitWork {
     tangent: TangentAssembler,
     kv: [Vec<f64>; 3],
     rhs: Vec<f64>,
-    /// The masses of the unknowns.
+    /// `m_p + dt c_p` of each node, then folded onto the unknowns.
+    node_diag: Vec<f64>,
     mass: Vec<f64>,
 }
 
@@ -47,7 +48,8 @@ struct PrefactoredWork {
     rest: [Vec<f64>; 3],
     /// The `dt` of the factor; NaN when it must be rebuilt (new parameters).
     dt: f64,
-    /// The masses of the unknowns.
+    /// `m_p + dt c_p` of each node, then folded onto the unknowns.
+    node_diag: Vec<f64>,
     mass: Vec<f64>,
 }
 
@@ -116,13 +118,15 @@ impl Dynamics {
         &self.f
     }
 
-    /// One symplectic Euler step: `v += dt/m (f(x) - d v)`, then `x += dt v`. Allocation-free.
+    /// One symplectic Euler step: `v += dt/m (f(x) - c v)` (`c`: each node's damping), then
+    /// `x += dt v`. Allocation-free.
     pub fn step_symplectic(&mut self, model: &MsmModel, dt: f64) {
         symplectic_step(model, self, dt);
     }
 
     /// One linearised backward Euler step (Baraff-Witkin):
-    /// `(M + dt d I + dt^2 K) dv = dt (f(x) - d v - dt K v)`, then `v += dv`, `x += dt v`.
+    /// `(M + dt C + dt^2 K) dv = dt (f(x) - C v - dt K v)`, then `v += dv`, `x += dt v`
+    /// (`C`: the diagonal of the nodes' damping).
     /// `K` is the tangent stiffness with each spring's geometric part clamped at zero, so the
     /// matrix is positive definite for any `dt`. The first call after [`Dynamics::apply_case`]
     /// builds the sparse pattern; later calls allocate nothing.
@@ -136,23 +140,27 @@ impl Dynamics {
                 let rhs = vec![0.0; tangent.system.n()];
                 let nn = self.free.len();
                 let mass = vec![0.0; tangent.system.n()];
-                ImplicitWork { tangent, kv: std::array::from_fn(|_| vec![0.0; nn]), rhs, mass }
+                let node_diag = vec![0.0; nn];
+                ImplicitWork { tangent, kv: std::array::from_fn(|_| vec![0.0; nn]), rhs, node_diag, mass }
             }
         };
         self.forces(model);
         let work = self.implicit.insert(work);
-        let d = model.params.d;
         for kv in work.kv.iter_mut() {
             kv.fill(0.0);
         }
-        work.tangent.assemble(model, &self.x, dt * dt, dt * d, true, Some((&self.v, &mut work.kv)));
-        work.tangent.dofs.fold_masses(&model.masses, &mut work.mass);
+        work.tangent.assemble(model, &self.x, dt * dt, 0.0, true, Some((&self.v, &mut work.kv)));
+        for ((o, m), c) in work.node_diag.iter_mut().zip(&model.masses).zip(&model.damping) {
+            *o = m + dt * c;
+        }
+        work.tangent.dofs.fold_masses(&work.node_diag, &mut work.mass);
         work.tangent.system.add_diagonal_scaled(1.0, &work.mass);
         work.tangent.system.factor()?;
         for (p, &free) in self.free.iter().enumerate() {
             if free != 0.0 {
                 for c in 0..3 {
                     let r = work.tangent.dofs.map[3 * p + c].0 as usize;
+                    let d = model.damping[p];
                     work.rhs[r] = dt * (self.f[c][p] - d * self.v[c][p] - dt * work.kv[c][p]);
                 }
             }
@@ -170,7 +178,7 @@ impl Dynamics {
     }
 
     /// One linearised backward Euler step with the rest tangent `K_0`, factorised once:
-    /// `(M + dt d I + dt^2 K_0) v' = M v + dt f(x)`, then `x += dt v'`. The spring forces `f(x)` are
+    /// `(M + dt C + dt^2 K_0) v' = M v + dt f(x)`, then `x += dt v'`. The spring forces `f(x)` are
     /// the full nonlinear ones; only the Jacobian is frozen at rest, so the step is as accurate
     /// as [`Dynamics::step_implicit`] for small strains and rotations and costs one force pass
     /// and one pair of triangular solves. The factor is rebuilt when `dt`, the parameters or
@@ -186,15 +194,18 @@ impl Dynamics {
                 let g = model.grid;
                 let rest = std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect());
                 let mass = vec![0.0; tangent.system.n()];
-                PrefactoredWork { tangent, rhs, rest, dt: f64::NAN, mass }
+                let node_diag = vec![0.0; g.num_nodes()];
+                PrefactoredWork { tangent, rhs, rest, dt: f64::NAN, node_diag, mass }
             }
         };
         self.forces(model);
         let work = self.prefactored.insert(work);
-        let d = model.params.d;
         if work.dt != dt {
-            work.tangent.assemble(model, &work.rest, dt * dt, dt * d, false, None);
-            work.tangent.dofs.fold_masses(&model.masses, &mut work.mass);
+            work.tangent.assemble(model, &work.rest, dt * dt, 0.0, false, None);
+            for ((o, m), c) in work.node_diag.iter_mut().zip(&model.masses).zip(&model.damping) {
+                *o = m + dt * c;
+            }
+            work.tangent.dofs.fold_masses(&work.node_diag, &mut work.mass);
             work.tangent.system.add_diagonal_scaled(1.0, &work.mass);
             work.tangent.system.factor()?;
             work.dt = dt;
@@ -248,13 +259,12 @@ impl Dynamics {
 #[inline(always)]
 fn symplectic_step_generic(model: &MsmModel, s: &mut Dynamics, dt: f64) {
     pair_forces(model, &s.x, &mut s.scratch);
-    let d = model.params.d;
     for c in 0..3 {
         let f = &mut s.f[c];
         gather_forces(model, &s.scratch, c, f, true);
         let (x, v, fe) = (&mut s.x[c], &mut s.v[c], &s.f_ext[c]);
-        for (((((x, v), f), fe), free), inv_m) in
-            x.iter_mut().zip(v.iter_mut()).zip(f.iter()).zip(fe).zip(&s.free).zip(&s.inv_mass)
+        for ((((((x, v), f), fe), free), inv_m), d) in
+            x.iter_mut().zip(v.iter_mut()).zip(f.iter()).zip(fe).zip(&s.free).zip(&s.inv_mass).zip(&model.damping)
         {
             let vn = (*v + dt * inv_m * (f + fe - d * *v)) * free;
             *v = vn;

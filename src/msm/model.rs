@@ -228,6 +228,9 @@ pub struct MsmModel {
     pub masses: Vec<f64>,
     /// The spring families with non-zero stiffness.
     pub families: Vec<FamilyLayout>,
+    /// Damping coefficient of each node, N s/m (force `-c_p v_p`): the paper's nodal `d` on every
+    /// node as built, or mass-proportional `alpha m_p` after [`MsmModel::set_mass_damping`].
+    pub damping: Vec<f64>,
 }
 
 impl MsmModel {
@@ -272,7 +275,17 @@ impl MsmModel {
         let side = crate::grid::CUBE_SIDE_M;
         let node_mass = density * side * side * side / grid.num_nodes() as f64;
         let masses = if hex { lumped_masses(&grid, density) } else { vec![node_mass; grid.num_nodes()] };
-        Ok(Self { grid, params, node_mass, masses, families })
+        let damping = vec![params.d; grid.num_nodes()];
+        Ok(Self { grid, params, node_mass, masses, families, damping })
+    }
+
+    /// Mass-proportional damping `C = alpha M` (1/s) instead of the nodal `d`: the Rayleigh
+    /// scheme of [`crate::dynamic::damping`]. A running [`super::Dynamics`] picks it up at its next
+    /// [`super::Dynamics::set_model`].
+    pub fn set_mass_damping(&mut self, alpha: f64) {
+        for (c, m) in self.damping.iter_mut().zip(&self.masses) {
+            *c = alpha * m;
+        }
     }
 
     /// All springs as an explicit list (for assembly of tangent matrices).

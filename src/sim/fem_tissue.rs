@@ -6,6 +6,7 @@
 
 use super::{Integrator, Tissue};
 use crate::cases::LoadCase;
+use crate::dynamic::damping::Damping;
 use crate::fem::FemModel;
 use crate::fem::dynamics::{FemDynamics, Formulation};
 use crate::grid::Grid;
@@ -23,14 +24,16 @@ pub struct FemTissue {
     free: Vec<f64>,
     dt_limit: f64,
     total_mass: f64,
+    density: f64,
+    damping: Damping,
 }
 
 impl FemTissue {
-    /// `material` on `grid` at rest, with the damping rate `alpha` (1/s, `C = alpha M`).
-    pub fn new(grid: Grid, material: &crate::material::Material, formulation: Formulation, alpha: f64) -> Self {
+    /// `material` on `grid` at rest, undamped until [`Tissue::set_damping_ratio`].
+    pub fn new(grid: Grid, material: &crate::material::Material, formulation: Formulation) -> Self {
         let model = FemModel::new(grid, material);
-        let dt_limit = fem_dt_limit(&model, material.density, alpha);
-        let dynamics = FemDynamics::new(model, material.density, formulation, alpha);
+        let dt_limit = fem_dt_limit(&model, material.density, 0.0);
+        let dynamics = FemDynamics::new(model, material.density, formulation, 0.0);
         let nn = grid.num_nodes();
         let split = |v: &[f64]| -> [Vec<f64>; 3] { std::array::from_fn(|c| (0..nn).map(|p| v[3 * p + c]).collect()) };
         Self {
@@ -41,6 +44,8 @@ impl FemTissue {
             free: vec![1.0; nn],
             dt_limit,
             total_mass: dynamics.mass.iter().sum::<f64>() / 3.0,
+            density: material.density,
+            damping: Damping::Ratio { zeta: 0.0, omega_1: f64::NAN },
             dynamics,
         }
     }
@@ -161,5 +166,22 @@ impl Tissue for FemTissue {
     }
     fn set_params(&mut self, _params: MsmParams) -> Result<(), String> {
         Err("a FEM model has no spring parameters".into())
+    }
+    fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String> {
+        let zeta = crate::dynamic::damping::check_ratio(zeta)?;
+        let omega_1 = match self.damping.omega_1().filter(|w| w.is_finite()) {
+            Some(w) => w,
+            None => crate::dynamic::modal::scene_fundamental(&crate::dynamic::modal::ModalModel::fem(
+                &self.dynamics.model,
+                self.density,
+            ))?,
+        };
+        self.damping = Damping::Ratio { zeta, omega_1 };
+        self.dynamics.alpha = self.damping.rate();
+        self.dt_limit = fem_dt_limit(&self.dynamics.model, self.density, self.dynamics.alpha);
+        Ok(())
+    }
+    fn damping(&self) -> Damping {
+        self.damping
     }
 }

@@ -10,6 +10,7 @@ pub mod tissue;
 pub use fem_tissue::FemTissue;
 pub use tissue::{MsmTissue, Tissue, explicit_dt_limit};
 
+use crate::dynamic::damping::Damping;
 use crate::fem::dynamics::Formulation;
 use crate::material::Material;
 use crate::msm::Topology;
@@ -44,11 +45,12 @@ impl ModelChoice {
     }
 
     /// The running tissue of `material` at rest on the paper's grid: a lattice with `params`
-    /// (the shipped tissue where `None`), or the FEM damped like the shipped default tissue
-    /// (its nodal `d` as a mass-proportional rate).
-    pub fn build(self, material: &Material, params: Option<MsmParams>) -> anyhow::Result<Box<dyn Tissue>> {
+    /// (the shipped tissue where `None`), or the FEM; damped by the ratio `zeta` at its
+    /// fundamental ([`crate::dynamic::damping`]), except the paper's axis lattice, which keeps
+    /// its nodal `d`.
+    pub fn build(self, material: &Material, params: Option<MsmParams>, zeta: f64) -> anyhow::Result<Box<dyn Tissue>> {
         let grid = crate::grid::Grid::paper();
-        Ok(match self {
+        let mut tissue: Box<dyn Tissue> = match self {
             ModelChoice::Lattice(t) => {
                 let p = match params {
                     Some(p) => p,
@@ -56,12 +58,18 @@ impl ModelChoice {
                 };
                 Box::new(MsmTissue::new(MsmModel::new(grid, p, material.density)?, material.density))
             }
-            ModelChoice::Fem(f) => {
-                // Undamped for a material without a shipped tissue.
-                let alpha = crate::tissue::fem_damping_rate(material).unwrap_or(0.0);
-                Box::new(FemTissue::new(grid, material, f, alpha))
-            }
-        })
+            ModelChoice::Fem(f) => Box::new(FemTissue::new(grid, material, f)),
+        };
+        if self.takes_damping_ratio() {
+            tissue.set_damping_ratio(zeta).map_err(|e| anyhow::anyhow!("{e}"))?;
+        }
+        Ok(tissue)
+    }
+
+    /// Whether the model is damped by a ratio (all but the paper's axis lattice, which keeps its
+    /// nodal `d`).
+    pub fn takes_damping_ratio(self) -> bool {
+        self != ModelChoice::Lattice(Topology::Axis)
     }
 }
 
@@ -147,6 +155,116 @@ pub fn choose_integrator(requested: Option<Integrator>, dt: f64, limit: f64) -> 
     }
 }
 
+/// Budgets on the dynamic error of the fundamental that the automatic choice of
+/// [`choose_step`] meets: the period's relative error and the damping ratio's error (in units of
+/// critical), both against the model's own damped fundamental, predicted by the integrator's
+/// closed form ([`crate::dynamic::single_mode`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DynamicBudget {
+    /// Largest relative period error (0.02 = 2 %).
+    pub period: f64,
+    /// Largest damping ratio error, in units of critical (0.01 = 1 % of critical).
+    pub damping: f64,
+}
+
+/// The viewer's dynamic budget: period within 2 %, damping within 1 % of critical.
+pub const DEFAULT_DYNAMIC_BUDGET: DynamicBudget = DynamicBudget { period: 0.02, damping: 0.01 };
+
+/// The automatic choice divides the step asked for into at most this many substeps.
+pub const MAX_AUTO_SUBSTEPS: usize = 64;
+
+/// What `scheme` at step `h` does to the fundamental of `damping` (`None`: no fundamental known),
+/// as (period error, damping error), or `None` when it does not keep the mode (unstable).
+pub fn predicted_error(integrator: Integrator, h: f64, damping: Damping) -> Option<(f64, f64)> {
+    let omega = damping.omega_1()?;
+    let zeta = damping.ratio()?;
+    let gamma = 2.0 * zeta * omega;
+    let want = crate::dynamic::single_mode::exact(omega, gamma);
+    let got = crate::dynamic::single_mode::discrete(crate::dynamic::measure::scheme(integrator), omega, gamma, h)?;
+    Some((
+        crate::dynamic::single_mode::period_error(got.period_s, want.period_s),
+        (got.damping_ratio - want.damping_ratio).abs(),
+    ))
+}
+
+/// The step policy: the integrator and step for the step `dt` asked for.
+///
+/// * An integrator asked for by name runs at `dt` ([`choose_integrator`]'s rule).
+/// * The automatic choice (`None`) for a model damped by a ratio takes the fewest substeps
+///   `dt / k` (`k <= MAX_AUTO_SUBSTEPS`) at which an integrator meets `budget` on the
+///   fundamental, symplectic Euler also staying within [`AUTO_EXPLICIT_FRACTION`] of its
+///   `limit`; symplectic Euler wins a tie (its step is the cheaper). When none meets it, the
+///   prefactored step at `dt`, with a note. For the paper's nodal damping (no fundamental known)
+///   it is [`choose_integrator`]'s stability rule at `dt`.
+///
+/// Returns the integrator, the step and a note for the user.
+pub fn choose_step(
+    requested: Option<Integrator>,
+    dt: f64,
+    limit: f64,
+    damping: Damping,
+    budget: DynamicBudget,
+) -> Result<(Integrator, f64, Option<String>), String> {
+    let meets = |i: Integrator, h: f64| {
+        predicted_error(i, h, damping).is_some_and(|(p, d)| p <= budget.period && d <= budget.damping)
+    };
+    if requested.is_some() || damping.omega_1().is_none() {
+        let i = choose_integrator(requested, dt, limit)?;
+        let note = match predicted_error(i, dt, damping) {
+            Some((p, d)) if !meets(i, dt) => Some(format!(
+                "{} at dt = {} s misses the dynamic budget on the fundamental: period error {:.2} % (budget {:.1} %),                  damping error {:.2} % of critical (budget {:.1} %)",
+                i.name(),
+                crate::io::num(dt),
+                100.0 * p,
+                100.0 * budget.period,
+                100.0 * d,
+                100.0 * budget.damping
+            )),
+            _ => None,
+        };
+        return Ok((i, dt, note));
+    }
+    let first = |i: Integrator| {
+        (1..=MAX_AUTO_SUBSTEPS).find(|&k| {
+            let h = dt / k as f64;
+            (i != Integrator::Symplectic || h <= AUTO_EXPLICIT_FRACTION * limit) && meets(i, h)
+        })
+    };
+    let choice = match (first(Integrator::Symplectic), first(Integrator::Prefactored)) {
+        (Some(e), Some(i)) if i < e => Some((Integrator::Prefactored, i)),
+        (Some(e), _) => Some((Integrator::Symplectic, e)),
+        (None, Some(i)) => Some((Integrator::Prefactored, i)),
+        (None, None) => None,
+    };
+    Ok(match choice {
+        Some((i, 1)) => (i, dt, None),
+        Some((i, k)) => {
+            let h = dt / k as f64;
+            (
+                i,
+                h,
+                Some(format!(
+                    "automatic: {} at {} s ({k} substeps of the {} s asked for) keeps the fundamental's period \
+                     within {:.1} % and its damping within {:.1} % of critical",
+                    i.name(),
+                    crate::io::num(h),
+                    crate::io::num(dt),
+                    100.0 * budget.period,
+                    100.0 * budget.damping
+                )),
+            )
+        }
+        None => (
+            Integrator::Prefactored,
+            dt,
+            Some(format!(
+                "no step down to dt / {MAX_AUTO_SUBSTEPS} meets the dynamic budget; prefactored implicit Euler at {} s",
+                crate::io::num(dt)
+            )),
+        ),
+    })
+}
+
 /// Stiffness of the dragging spring, N/m, and its damping, N s/m.
 pub const DRAG_STIFFNESS: f64 = 1000.0;
 const DRAG_DAMPING: f64 = 1.0;
@@ -184,6 +302,10 @@ pub struct Simulation {
     pub integrator: Integrator,
     /// What was asked for (`None`: the automatic choice), kept for [`Simulation::set_params`].
     requested: Option<Integrator>,
+    /// The step asked for, s (the automatic choice may run substeps of it).
+    requested_dt: f64,
+    /// The dynamic budget of the automatic choice.
+    pub budget: DynamicBudget,
     /// Time step, s.
     pub dt: f64,
     /// The active tool.
@@ -226,6 +348,8 @@ impl Simulation {
         Self {
             integrator,
             requested: Some(integrator),
+            requested_dt: dt,
+            budget: DEFAULT_DYNAMIC_BUDGET,
             dt,
             tool: Tool::None,
             time_s: 0.0,
@@ -248,19 +372,19 @@ impl Simulation {
         self.tissue.explicit_dt_limit()
     }
 
-    /// Sets the integrator and step by [`choose_integrator`]; on a refusal switches to
-    /// prefactored implicit Euler and says so. The request is kept: new parameters apply the
-    /// policy again.
+    /// Sets the integrator and step by [`choose_step`] (the automatic choice meets
+    /// [`Simulation::budget`]); on a refusal switches to prefactored implicit Euler and says so.
+    /// The request is kept: new parameters or damping apply the policy again.
     pub fn set_integrator(&mut self, requested: Option<Integrator>, dt: f64) -> Option<String> {
-        self.dt = dt;
         self.requested = requested;
-        match choose_integrator(requested, dt, self.dt_limit()) {
-            Ok(i) => {
-                self.integrator = i;
-                None
+        self.requested_dt = dt;
+        match choose_step(requested, dt, self.dt_limit(), self.tissue.damping(), self.budget) {
+            Ok((i, h, note)) => {
+                (self.integrator, self.dt) = (i, h);
+                note
             }
             Err(why) => {
-                self.integrator = Integrator::Prefactored;
+                (self.integrator, self.dt) = (Integrator::Prefactored, dt);
                 Some(format!("{why}: switched to prefactored implicit Euler"))
             }
         }
@@ -270,7 +394,20 @@ impl Simulation {
     /// applies the integrator policy to the new explicit limit (what it says, if anything).
     pub fn set_params(&mut self, params: MsmParams) -> Result<Option<String>, String> {
         self.tissue.set_params(params)?;
-        Ok(self.set_integrator(self.requested, self.dt))
+        Ok(self.set_integrator(self.requested, self.requested_dt))
+    }
+
+    /// Damps the tissue by the ratio `zeta` at its fundamental and applies the integrator policy
+    /// again (what it says, if anything).
+    pub fn set_damping_ratio(&mut self, zeta: f64) -> Result<Option<String>, String> {
+        self.tissue.set_damping_ratio(zeta)?;
+        Ok(self.set_integrator(self.requested, self.requested_dt))
+    }
+
+    /// Sets the automatic choice's dynamic budget and applies the policy again.
+    pub fn set_budget(&mut self, budget: DynamicBudget) -> Option<String> {
+        self.budget = budget;
+        self.set_integrator(self.requested, self.requested_dt)
     }
 
     /// Node displacements from rest, row = node.

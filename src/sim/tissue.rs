@@ -9,6 +9,7 @@
 
 use super::Integrator;
 use crate::cases::LoadCase;
+use crate::dynamic::damping::Damping;
 use crate::grid::Grid;
 use crate::msm::{Dynamics, MsmModel, MsmParams};
 
@@ -44,8 +45,27 @@ pub trait Tissue: Send + std::fmt::Debug {
     fn apply_case(&mut self, case: &LoadCase);
     /// The running mass-spring parameters, if the model has them.
     fn params(&self) -> Option<MsmParams>;
-    /// Replaces the parameters, keeping the state (a calibration result applied live).
+    /// Replaces the parameters, keeping the state (a calibration result applied live); a damping
+    /// ratio set stays set (at the new fundamental).
     fn set_params(&mut self, params: MsmParams) -> Result<(), String>;
+    /// Damps the model by the ratio `zeta` at its fundamental on the viewer's scene, mass
+    /// proportionally ([`crate::dynamic::damping`]); refused for the paper's axis lattice.
+    fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String>;
+    /// How the model is damped now.
+    fn damping(&self) -> Damping;
+}
+
+/// The mass-proportional damping of `zeta` for `model` (a lattice), and the rate applied; its
+/// fundamental is solved unless `known` (the same model's).
+fn lattice_ratio_damping(model: &mut MsmModel, zeta: f64, known: Option<f64>) -> Result<Damping, String> {
+    let zeta = crate::dynamic::damping::check_ratio(zeta)?;
+    let omega_1 = match known {
+        Some(w) => w,
+        None => crate::dynamic::modal::scene_fundamental(&crate::dynamic::modal::ModalModel::lattice(model)?)?,
+    };
+    let damping = Damping::Ratio { zeta, omega_1 };
+    model.set_mass_damping(damping.rate());
+    Ok(damping)
 }
 
 /// A mass-spring lattice as a [`Tissue`].
@@ -57,14 +77,18 @@ pub struct MsmTissue {
     pub dynamics: Dynamics,
     density: f64,
     dt_limit: f64,
+    /// The ratio asked for (kept across parameters; the axis lattice uses its nodal `d`).
+    ratio: Option<f64>,
+    damping: Damping,
 }
 
 impl MsmTissue {
-    /// `model` at rest (built for `density`, kg/m^3).
+    /// `model` at rest (built for `density`, kg/m^3), damped by the parameters' nodal `d`.
     pub fn new(model: MsmModel, density: f64) -> Self {
         let dynamics = Dynamics::new(&model);
         let dt_limit = explicit_dt_limit(&model);
-        Self { model, dynamics, density, dt_limit }
+        let damping = Damping::Nodal(model.params.d);
+        Self { model, dynamics, density, dt_limit, ratio: None, damping }
     }
 
     /// The lattice of `params` on the paper's grid for a material of `density`.
@@ -127,16 +151,36 @@ impl Tissue for MsmTissue {
         Some(self.model.params)
     }
     fn set_params(&mut self, params: MsmParams) -> Result<(), String> {
-        self.model = MsmModel::new(self.model.grid, params, self.density).map_err(|e| e.to_string())?;
+        let mut model = MsmModel::new(self.model.grid, params, self.density).map_err(|e| e.to_string())?;
+        // The paper's axis lattice has no fundamental to set a ratio at: its nodal `d`.
+        let damping = match self.ratio {
+            Some(zeta) if params.topology() != crate::msm::Topology::Axis => {
+                lattice_ratio_damping(&mut model, zeta, None)?
+            }
+            _ => Damping::Nodal(params.d),
+        };
+        self.model = model;
+        self.damping = damping;
         self.dynamics.set_model(&self.model);
         self.dt_limit = explicit_dt_limit(&self.model);
         Ok(())
+    }
+    fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String> {
+        // The parameters are unchanged: the fundamental already solved is the model's.
+        self.damping = lattice_ratio_damping(&mut self.model, zeta, self.damping.omega_1())?;
+        self.ratio = Some(zeta);
+        self.dynamics.set_model(&self.model);
+        self.dt_limit = explicit_dt_limit(&self.model);
+        Ok(())
+    }
+    fn damping(&self) -> Damping {
+        self.damping
     }
 }
 
 /// Estimated critical time step of symplectic Euler for a lattice, `2 / omega_max` from
 /// Gershgorin's bound `omega_max^2 <= max_i sum_j |K_ij| / m` on the rest stiffness
-/// (conservative, `m` each node's mass), narrowed by the nodal damping to `2 m_min / d`.
+/// (conservative, `m` each node's mass), narrowed by the damping to the smallest `2 m_p / c_p`.
 pub fn explicit_dt_limit(model: &MsmModel) -> f64 {
     let mut row = vec![0.0f64; model.grid.num_nodes()];
     for s in model.springs() {
@@ -149,7 +193,11 @@ pub fn explicit_dt_limit(model: &MsmModel) -> f64 {
         row[s.b] += 2.0 * k * w;
     }
     let lambda = row.iter().zip(&model.masses).map(|(r, m)| r / m).fold(0.0, f64::max);
-    let lightest = model.masses.iter().copied().fold(f64::INFINITY, f64::min);
-    let damping_limit = if model.params.d > 0.0 { 2.0 * lightest / model.params.d } else { f64::INFINITY };
+    let damping_limit = model
+        .masses
+        .iter()
+        .zip(&model.damping)
+        .map(|(m, c)| if *c > 0.0 { 2.0 * m / c } else { f64::INFINITY })
+        .fold(f64::INFINITY, f64::min);
     (2.0 / lambda.sqrt()).min(damping_limit)
 }

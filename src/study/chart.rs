@@ -148,6 +148,11 @@ pub struct ChartPoint {
     /// Largest stable explicit step ([`damped_explicit_limit`] of `omega_max` and the damping rate), s;
     /// infinite for implicit.
     pub dt_max_s: f64,
+    /// The time step of the point, s: 0.9 of `dt_max_s` (explicit), or one of
+    /// [`IMPLICIT_STEPS_S`] (implicit).
+    pub dt_s: f64,
+    /// Wall time per simulated second, `step_s / dt_s`, s.
+    pub cost_per_sim_s: f64,
     /// Wall time of the static answer of one case, s.
     pub static_s: f64,
     /// Bytes held by state, model and factor.
@@ -161,25 +166,43 @@ pub struct ChartPoint {
     /// paper's 8^3 grid, the scene a user touches) only; NaN at other resolutions, where a point
     /// load's answer depends on the mesh and no common touch reference exists.
     pub force_err_pct: f64,
-    /// On the Pareto front of (step time, average error) for its object.
+    /// Dynamic error: the worst trajectory error against the FEM's converged transients (the
+    /// viewer scene's top-face step load and its release, first 0.2 s), percent; model and
+    /// integrator together. At the viewer's 8^3 only (NaN elsewhere), as the touch scores.
+    pub dyn_err_pct: f64,
+    /// The integrator's period error on the model's own fundamental, measured by time stepping,
+    /// percent (8^3 only).
+    pub period_err_pct: f64,
+    /// The integrator's damping ratio error on the model's own fundamental, percent of critical
+    /// (8^3 only).
+    pub damping_err_pct: f64,
+    /// On the Pareto front of (cost per simulated second, average static error) for its object.
     pub pareto: bool,
+    /// On the Pareto front of (cost per simulated second, dynamic error) for its object.
+    pub pareto_dynamic: bool,
 }
 
+/// The steps of the implicit points, s: from 0.1 ms to one frame at 60 Hz.
+pub const IMPLICIT_STEPS_S: [f64; 6] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 1.0 / 60.0];
+/// The damping ratio of every chart point (mass-proportional at each model's fundamental).
+pub const CHART_DAMPING_RATIO: f64 = crate::dynamic::damping::DEFAULT_DAMPING_RATIO;
+
 impl ChartPoint {
-    /// Wall time to advance `1 / rate_hz` of simulated time: one implicit step, or as many
-    /// explicit steps as `0.9 dt_max` needs.
+    /// Wall time to advance `1 / rate_hz` of simulated time: as many steps of `dt_s` as the
+    /// tick needs (at least one).
     pub fn tick_s(&self, rate_hz: f64) -> f64 {
-        let tick = 1.0 / rate_hz;
-        if self.dt_max_s.is_finite() {
-            (tick / (0.9 * self.dt_max_s)).ceil().max(1.0) * self.step_s
-        } else {
-            self.step_s
-        }
+        self.substeps(rate_hz) * self.step_s
     }
 
-    /// Explicit substeps per tick at `rate_hz` (1 for implicit).
+    /// Steps of `dt_s` per tick at `rate_hz`.
     pub fn substeps(&self, rate_hz: f64) -> f64 {
-        if self.dt_max_s.is_finite() { (1.0 / rate_hz / (0.9 * self.dt_max_s)).ceil().max(1.0) } else { 1.0 }
+        (1.0 / rate_hz / self.dt_s * (1.0 - 1e-9)).ceil().max(1.0)
+    }
+
+    /// Whether its step fits in a tick at `rate_hz` (an implicit step longer than the tick
+    /// cannot run at that rate).
+    pub fn fits_rate(&self, rate_hz: f64) -> bool {
+        self.dt_s <= 1.0 / rate_hz * (1.0 + 1e-9)
     }
 }
 
@@ -213,23 +236,80 @@ struct PointBase<'a> {
     force: f64,
 }
 
+/// How one point steps: its integrator, wall time per step, explicit limit, step and memory.
+struct Stepping {
+    integrator: ChartIntegrator,
+    step_s: f64,
+    dt_max_s: f64,
+    dt_s: f64,
+    memory_bytes: usize,
+}
+
 impl PointBase<'_> {
-    fn point(&self, integrator: ChartIntegrator, step_s: f64, dt_max_s: f64, memory_bytes: usize) -> ChartPoint {
+    fn point(&self, st: &Stepping, dynamic: Option<&crate::dynamic::measure::DynamicReport>) -> ChartPoint {
+        let pct = |f: fn(&crate::dynamic::measure::DynamicReport) -> f64| dynamic.map_or(f64::NAN, |d| 100.0 * f(d));
         ChartPoint {
             object: self.object.into(),
             model: self.model,
             n: self.n,
-            integrator,
-            step_s,
-            dt_max_s,
+            integrator: st.integrator,
+            step_s: st.step_s,
+            dt_max_s: st.dt_max_s,
+            dt_s: st.dt_s,
+            cost_per_sim_s: st.step_s / st.dt_s,
             static_s: self.static_s,
-            memory_bytes,
+            memory_bytes: st.memory_bytes,
             avg_err_pct: self.avg,
             max_err_pct: self.max,
             force_err_pct: self.force,
+            dyn_err_pct: pct(|d| d.trajectory_error),
+            period_err_pct: pct(|d| d.period_error),
+            damping_err_pct: pct(|d| d.damping_error),
             pareto: false,
+            pareto_dynamic: false,
         }
     }
+}
+
+/// The chart's points of one model and resolution: an explicit point at 0.9 of `dt_max` and an
+/// implicit point at each of [`IMPLICIT_STEPS_S`] (when the implicit step was timed), each with
+/// its dynamic measurement where `dynamics` is given (the viewer's 8^3 scene).
+fn points_of(
+    shared: &PointBase<'_>,
+    explicit: (f64, f64, usize),
+    implicit: Option<(f64, usize)>,
+    dynamics: Option<(&crate::dynamic::measure::References, crate::sim::ModelChoice, Option<MsmParams>)>,
+) -> anyhow::Result<Vec<ChartPoint>> {
+    use crate::dynamic::measure::{Configuration, measure};
+    use crate::sim::Integrator;
+    let (step_s, dt_max_s, memory_bytes) = explicit;
+    let mut steppings =
+        vec![Stepping { integrator: ChartIntegrator::Explicit, step_s, dt_max_s, dt_s: 0.9 * dt_max_s, memory_bytes }];
+    if let Some((step_s, memory_bytes)) = implicit {
+        steppings.extend(IMPLICIT_STEPS_S.iter().map(|&dt_s| Stepping {
+            integrator: ChartIntegrator::Implicit,
+            step_s,
+            dt_max_s: f64::INFINITY,
+            dt_s,
+            memory_bytes,
+        }));
+    }
+    steppings
+        .iter()
+        .map(|st| {
+            let report = match dynamics {
+                Some((refs, model, params)) => {
+                    let integrator = match st.integrator {
+                        ChartIntegrator::Explicit => Integrator::Symplectic,
+                        ChartIntegrator::Implicit => Integrator::Prefactored,
+                    };
+                    Some(measure(refs, Configuration { model, params, integrator, dt: st.dt_s })?)
+                }
+                None => None,
+            };
+            Ok(shared.point(st, report.as_ref()))
+        })
+        .collect()
 }
 
 /// The 64 common sample points: the nodes of the 4^3 lattice (as [`Grid::positions`] of a 4^3 grid).
@@ -322,10 +402,16 @@ fn msm_points(
     topology: Topology,
     grid: Grid,
     opts: &ChartOptions,
-    (reference, touch): (&[Vec<[f64; 3]>], Option<&crate::touch::Reference>),
+    (reference, touch, dynamics): (
+        &[Vec<[f64; 3]>],
+        Option<&crate::touch::Reference>,
+        Option<&crate::dynamic::measure::References>,
+    ),
+    alpha: f64,
 ) -> anyhow::Result<Vec<ChartPoint>> {
     let params = msm_params_at(material, topology, &grid)?;
-    let model = MsmModel::new(grid, params, material.density)?;
+    let mut model = MsmModel::new(grid, params, material.density)?;
+    model.set_mass_damping(alpha);
     let cs = cases(&grid, object);
     let t = Instant::now();
     let chord = statics::NewtonOptions { chord: true, ..Default::default() };
@@ -340,18 +426,18 @@ fn msm_points(
     let (avg, max) = errors(&sampled(&grid, &answers), reference);
     let fixed = cs[0].fixed_nodes();
     let omega = crate::study::stability::msm_omega_max(&model, &fixed, CHART_POWER_ITERATIONS);
-    let dt_max = damped_explicit_limit(omega, params.d / model.node_mass);
-    let mut dynamics = Dynamics::new(&model);
-    dynamics.apply_case(&cs[0]);
-    let explicit = time_per_call(opts.timing_s, || dynamics.step_symplectic(&model, 0.5 * dt_max));
+    let dt_max = damped_explicit_limit(omega, alpha);
+    let mut stepper = Dynamics::new(&model);
+    stepper.apply_case(&cs[0]);
+    let explicit = time_per_call(opts.timing_s, || stepper.step_symplectic(&model, 0.5 * dt_max));
     let base = msm_memory(&model);
-    let mut out = vec![];
+    let mut implicit = None;
     if topology == Topology::Axis || grid.n() <= MAX_COUPLED_IMPLICIT_N {
-        let mut dynamics = Dynamics::new(&model);
-        dynamics.apply_case(&cs[0]);
-        dynamics.step_prefactored(&model, 1e-3)?;
-        let implicit = time_fallible(opts.timing_s, || dynamics.step_prefactored(&model, 1e-3))?;
-        out.push((ChartIntegrator::Implicit, implicit, f64::INFINITY, base + dynamics.prefactored_memory_bytes()));
+        let mut stepper = Dynamics::new(&model);
+        stepper.apply_case(&cs[0]);
+        stepper.step_prefactored(&model, 1e-3)?;
+        let t = time_fallible(opts.timing_s, || stepper.step_prefactored(&model, 1e-3))?;
+        implicit = Some((t, base + stepper.prefactored_memory_bytes()));
     }
     let force = match touch {
         Some(reference) => {
@@ -362,9 +448,8 @@ fn msm_points(
         None => f64::NAN,
     };
     let shared = PointBase { object, model: ModelKind::Msm(topology), n: grid.n(), static_s, avg, max, force };
-    let mut points = vec![shared.point(ChartIntegrator::Explicit, explicit, dt_max, base)];
-    points.extend(out.into_iter().map(|(i, t, dt, m)| shared.point(i, t, dt, m)));
-    Ok(points)
+    let dynamics = dynamics.map(|r| (r, crate::sim::ModelChoice::Lattice(topology), Some(params)));
+    points_of(&shared, (explicit, dt_max, base), implicit, dynamics)
 }
 
 fn fem_points(
@@ -373,7 +458,11 @@ fn fem_points(
     formulation: Formulation,
     grid: Grid,
     opts: &ChartOptions,
-    (reference, touch): (&[Vec<[f64; 3]>], Option<&crate::touch::Reference>),
+    (reference, touch, dynamics): (
+        &[Vec<[f64; 3]>],
+        Option<&crate::touch::Reference>,
+        Option<&crate::dynamic::measure::References>,
+    ),
     alpha: f64,
 ) -> anyhow::Result<Vec<ChartPoint>> {
     let model = FemModel::new(grid, material);
@@ -404,9 +493,8 @@ fn fem_points(
     // The touch reference is this FEM on this mesh: it scores itself exactly.
     let force = if touch.is_some() { 0.0 } else { f64::NAN };
     let shared = PointBase { object, model: ModelKind::Fem(formulation), n: grid.n(), static_s, avg, max, force };
-    let mut points = vec![shared.point(ChartIntegrator::Explicit, explicit, dt_max, without)];
-    points.extend(implicit.map(|(t, m)| shared.point(ChartIntegrator::Implicit, t, f64::INFINITY, m)));
-    Ok(points)
+    let dynamics = dynamics.map(|r| (r, crate::sim::ModelChoice::Fem(formulation), None));
+    points_of(&shared, (explicit, dt_max, without), implicit, dynamics)
 }
 
 /// Static answer of the corotational FEM of a clamped case: quasi-Newton with the linear
@@ -453,17 +541,90 @@ pub fn damped_explicit_limit(omega: f64, gamma: f64) -> f64 {
     4.0 / (gamma + (gamma * gamma + 4.0 * omega * omega).sqrt())
 }
 
-/// Marks the Pareto front of (step time, average error) per object.
+/// Marks the Pareto fronts of (cost per simulated second, average static error) and (cost per
+/// simulated second, dynamic error) per object; a point without a dynamic score is on no
+/// dynamic front.
 pub fn mark_pareto(points: &mut [ChartPoint]) {
     let snapshot = points.to_vec();
-    for p in points.iter_mut() {
-        p.pareto = !snapshot.iter().any(|q| {
+    let dominated = |p: &ChartPoint, err: fn(&ChartPoint) -> f64| {
+        snapshot.iter().any(|q| {
             q.object == p.object
-                && q.step_s <= p.step_s
-                && q.avg_err_pct <= p.avg_err_pct
-                && (q.step_s < p.step_s || q.avg_err_pct < p.avg_err_pct)
-        });
+                && err(q).is_finite()
+                && q.cost_per_sim_s <= p.cost_per_sim_s
+                && err(q) <= err(p)
+                && (q.cost_per_sim_s < p.cost_per_sim_s || err(q) < err(p))
+        })
+    };
+    for p in points.iter_mut() {
+        p.pareto = !dominated(p, |q| q.avg_err_pct);
+        p.pareto_dynamic = p.dyn_err_pct.is_finite() && !dominated(p, |q| q.dyn_err_pct);
     }
+}
+
+/// Where a series of points (ascending steps) crosses `threshold` percent of `err`: the step by
+/// log-log interpolation between the last step below and the first above, or why not.
+pub fn crossing(points: &[&ChartPoint], err: fn(&ChartPoint) -> f64, threshold: f64) -> String {
+    let mut sorted: Vec<&&ChartPoint> = points.iter().filter(|p| err(p).is_finite()).collect();
+    sorted.sort_by(|a, b| a.dt_s.total_cmp(&b.dt_s));
+    let Some(first) = sorted.first() else { return "not measured".into() };
+    if err(first) > threshold {
+        return format!("above {threshold} % already at {} ms ({:.2} %)", fmt_ms(first.dt_s), err(first));
+    }
+    for w in sorted.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        if err(a) <= threshold && err(b) > threshold {
+            let t = (threshold.ln() - err(a).max(1e-12).ln()) / (err(b).ln() - err(a).max(1e-12).ln());
+            let dt = (a.dt_s.ln() + t * (b.dt_s.ln() - a.dt_s.ln())).exp();
+            return format!(
+                "crosses {threshold} % at about {} ms (between {} ms: {:.2} % and {} ms: {:.2} %)",
+                fmt_ms(dt),
+                fmt_ms(a.dt_s),
+                err(a),
+                fmt_ms(b.dt_s),
+                err(b)
+            );
+        }
+    }
+    let last = sorted.last().map_or(first, |l| l);
+    format!("below {threshold} % up to {} ms ({:.2} %)", fmt_ms(last.dt_s), err(last))
+}
+
+fn fmt_ms(s: f64) -> String {
+    format!("{:.3}", s * 1e3)
+}
+
+/// The mass-proportional rate of `kind` for `material`: the chart's damping ratio at the
+/// model's own 8^3 fundamental.
+fn damping_rate(material: &Material, kind: ModelKind) -> anyhow::Result<f64> {
+    let choice = match kind {
+        ModelKind::Msm(t) => crate::sim::ModelChoice::Lattice(t),
+        ModelKind::Fem(f) => crate::sim::ModelChoice::Fem(f),
+    };
+    let modal = crate::dynamic::measure::modal_model(material, choice, None)?;
+    let omega = crate::dynamic::modal::scene_fundamental(&modal).map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(crate::dynamic::damping::mass_proportional_rate(CHART_DAMPING_RATIO, omega))
+}
+
+/// The FEM's dynamic reference of `material` at the chart's damping ratio, with a note on how
+/// each transient converged.
+fn dynamic_references(
+    material: &Material,
+    notes: &mut Vec<String>,
+) -> anyhow::Result<crate::dynamic::measure::References> {
+    let refs = crate::dynamic::measure::References::new(material, CHART_DAMPING_RATIO)?;
+    for r in &refs.transients {
+        let (h, change) = r.history.last().copied().unwrap_or((f64::NAN, f64::NAN));
+        notes.push(format!(
+            "object {}: the FEM's {} transient (Newmark average acceleration, damping ratio {}) converged at a step \
+             of {} s: halving it changed the answer by {:.3} %",
+            material.name,
+            r.transient.name(),
+            CHART_DAMPING_RATIO,
+            crate::io::num(h),
+            100.0 * change
+        ));
+    }
+    Ok(refs)
 }
 
 /// Computes every point: for each object, model, resolution and integrator.
@@ -488,15 +649,15 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
             .map(|s| s.displacements)
             .collect();
         let reference = sampled(&ref_grid, &reference);
-        // Same damping as the default tissue, as a mass-proportional rate.
-        let alpha = crate::tissue::fem_damping_rate(&material)?;
+        let alpha = |kind: ModelKind| damping_rate(&material, kind);
         for &n in &opts.resolutions {
             let grid = Grid::new(n)?;
-            let touch = if n == Grid::paper().n() {
-                progress(&format!("object {object}: touch benchmark FEM at {n}^3"));
-                Some(crate::touch::Reference::new(&material, grid)?)
+            let (touch, dynamics) = if n == Grid::paper().n() {
+                progress(&format!("object {object}: touch benchmark and dynamic reference FEM at {n}^3"));
+                let refs = dynamic_references(&material, &mut notes)?;
+                (Some(crate::touch::Reference::new(&material, grid)?), Some(refs))
             } else {
-                None
+                (None, None)
             };
             for kind in ModelKind::CHARTED {
                 if opts.cancel.as_ref().is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
@@ -507,11 +668,10 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
                     kind.name(),
                     start.elapsed().as_secs_f64()
                 ));
+                let refs = (&reference[..], touch.as_ref(), dynamics.as_ref());
                 let mut pts = match kind {
-                    ModelKind::Msm(t) => msm_points(object, &material, t, grid, opts, (&reference, touch.as_ref()))?,
-                    ModelKind::Fem(f) => {
-                        fem_points(object, &material, f, grid, opts, (&reference, touch.as_ref()), alpha)?
-                    }
+                    ModelKind::Msm(t) => msm_points(object, &material, t, grid, opts, refs, alpha(kind)?)?,
+                    ModelKind::Fem(f) => fem_points(object, &material, f, grid, opts, refs, alpha(kind)?)?,
                 };
                 points.append(&mut pts);
             }

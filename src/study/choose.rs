@@ -30,6 +30,11 @@ impl Metric {
     }
 }
 
+/// `value <= bound` (false for NaN: not scored).
+fn within(value: f64, bound: f64) -> bool {
+    value <= bound
+}
+
 /// The chosen point and a plain-text account of why, from the chart's data.
 #[derive(Debug, Clone)]
 pub struct Choice {
@@ -49,6 +54,12 @@ pub struct Budget {
     pub max_error_pct: Option<f64>,
     /// Which static error `max_error_pct` bounds.
     pub metric: Metric,
+    /// Largest period error of the fundamental (the integrator's, measured), percent (not
+    /// bounded when `None`).
+    pub max_period_error_pct: Option<f64>,
+    /// Largest damping ratio error of the fundamental, percent of critical (not bounded when
+    /// `None`).
+    pub max_damping_error_pct: Option<f64>,
     /// Real-time step rate, Hz.
     pub rate_hz: f64,
 }
@@ -57,7 +68,10 @@ impl Budget {
     /// Whether `p` is accurate enough: its validation force error (not scored: not accurate
     /// enough) and, where bounded, its static error.
     fn accurate(&self, p: &ChartPoint) -> bool {
-        p.force_err_pct <= self.max_force_error_pct && self.max_error_pct.is_none_or(|m| self.metric.of(p) <= m)
+        p.force_err_pct <= self.max_force_error_pct
+            && self.max_error_pct.is_none_or(|m| self.metric.of(p) <= m)
+            && self.max_period_error_pct.is_none_or(|m| p.period_err_pct <= m)
+            && self.max_damping_error_pct.is_none_or(|m| p.damping_err_pct <= m)
     }
 
     fn accuracy_text(&self) -> String {
@@ -72,6 +86,12 @@ impl Budget {
                 super::chart::REFERENCE_N
             );
         }
+        if let Some(m) = self.max_period_error_pct {
+            s += &format!(", fundamental period error <= {m} % (time stepping vs the model's own mode)");
+        }
+        if let Some(m) = self.max_damping_error_pct {
+            s += &format!(", damping ratio error <= {m} % of critical");
+        }
         s
     }
 
@@ -80,19 +100,23 @@ impl Budget {
             "no touch score".to_owned()
         } else if p.force_err_pct > self.max_force_error_pct {
             format!("touch force error {:.1} % > {} %", p.force_err_pct, self.max_force_error_pct)
+        } else if let Some(m) = self.max_period_error_pct.filter(|m| !within(p.period_err_pct, *m)) {
+            format!("period error {:.2} % > {m} %", p.period_err_pct)
+        } else if let Some(m) = self.max_damping_error_pct.filter(|m| !within(p.damping_err_pct, *m)) {
+            format!("damping error {:.2} % > {m} % of critical", p.damping_err_pct)
         } else {
             format!("{} error {:.3} % > {} %", self.metric.name(), self.metric.of(p), self.max_error_pct.unwrap_or(0.0))
         }
     }
 }
 
-/// Picks, among the points of `object`, the one with the least wall time per real-time tick
-/// (`1 / rate_hz`; explicit integrators take as many steps of `0.9 dt_max` as a tick needs) that
-/// meets `budget` and whose tick fits in `1 / rate_hz`. Ties go to less memory.
+/// Picks, among the points of `object` whose step fits in a tick, the one with the least wall
+/// time per real-time tick (`1 / rate_hz`; as many steps of the point's `dt_s` as a tick needs)
+/// that meets `budget` and whose tick fits in `1 / rate_hz`. Ties go to less memory.
 pub fn choose(points: &[ChartPoint], object: &str, budget: &Budget) -> Choice {
     let rate_hz = budget.rate_hz;
     let budget_s = 1.0 / rate_hz;
-    let mut mine: Vec<&ChartPoint> = points.iter().filter(|p| p.object == object).collect();
+    let mut mine: Vec<&ChartPoint> = points.iter().filter(|p| p.object == object && p.fits_rate(rate_hz)).collect();
     mine.sort_by(|a, b| a.tick_s(rate_hz).total_cmp(&b.tick_s(rate_hz)).then(a.memory_bytes.cmp(&b.memory_bytes)));
     let ok = |p: &ChartPoint| budget.accurate(p) && p.tick_s(rate_hz) <= budget_s;
     let chosen = mine.iter().find(|p| ok(p)).map(|p| (*p).clone());
@@ -103,8 +127,19 @@ pub fn choose(points: &[ChartPoint], object: &str, budget: &Budget) -> Choice {
     );
     let _ = writeln!(
         s,
-        "{:<18} {:>4} {:<9} {:>8} {:>9} {:>9} {:>9} {:>11} {:>10}  verdict",
-        "model", "n", "stepper", "force %", "avg %", "max %", "substeps", "tick us", "memory kB"
+        "{:<18} {:>4} {:<9} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>10}  verdict",
+        "model",
+        "n",
+        "stepper",
+        "dt ms",
+        "force %",
+        "avg %",
+        "max %",
+        "period %",
+        "damping %",
+        "substeps",
+        "tick us",
+        "memory kB"
     );
     for p in &mine {
         let tick = p.tick_s(rate_hz);
@@ -117,13 +152,16 @@ pub fn choose(points: &[ChartPoint], object: &str, budget: &Budget) -> Choice {
         let mark = if chosen.as_ref().is_some_and(|c| c == *p) { " <= chosen" } else { "" };
         let _ = writeln!(
             s,
-            "{:<18} {:>4} {:<9} {:>8.2} {:>9.4} {:>9.4} {:>9} {:>11.2} {:>10.1}  {verdict}{mark}",
+            "{:<18} {:>4} {:<9} {:>8.4} {:>8.2} {:>9.4} {:>9.4} {:>9.3} {:>9.3} {:>9} {:>11.2} {:>10.1}  {verdict}{mark}",
             p.model,
             p.n,
             p.integrator,
+            p.dt_s * 1e3,
             p.force_err_pct,
             p.avg_err_pct,
             p.max_err_pct,
+            p.period_err_pct,
+            p.damping_err_pct,
             p.substeps(rate_hz),
             tick * 1e6,
             p.memory_bytes as f64 / 1e3
@@ -143,16 +181,20 @@ fn conclusion(s: &mut String, chosen: Option<&ChartPoint>, mine: &[&ChartPoint],
         Some(c) => {
             let _ = write!(
                 s,
-                "\nChosen: {} at {}^3 with the {} integrator: touch force error {:.2} % (budget {} %), {} error {:.4} %, \
-                 {:.2} us per tick ({} step(s) of {:.2} us; {:.0} % of the tick budget), {:.1} kB. It is the cheapest \
-                 per tick of the {} points that meet both budgets.",
+                "\nChosen: {} at {}^3 with the {} integrator at dt = {:.4} ms: touch force error {:.2} % (budget {} %), {} \
+                 error {:.4} %, period error {:.3} %, damping error {:.3} % of critical, {:.2} us per tick ({} step(s) \
+                 of {:.2} us; {:.0} % of the tick budget), {:.1} kB. It is the cheapest per tick of the {} points that \
+                 meet both budgets.",
                 c.model,
                 c.n,
                 c.integrator,
+                c.dt_s * 1e3,
                 c.force_err_pct,
                 budget.max_force_error_pct,
                 budget.metric.name(),
                 budget.metric.of(c),
+                c.period_err_pct,
+                c.damping_err_pct,
                 c.tick_s(rate_hz) * 1e6,
                 c.substeps(rate_hz),
                 c.step_s * 1e6,
@@ -213,6 +255,7 @@ mod tests {
         max_err_pct: f64,
     ) -> ChartPoint {
         let force_err_pct = max_err_pct * 3.0;
+        let dt_s = if dt_max_s.is_finite() { 0.9 * dt_max_s } else { 1e-3 };
         ChartPoint {
             object: "A".into(),
             model,
@@ -220,6 +263,12 @@ mod tests {
             integrator,
             step_s,
             dt_max_s,
+            dt_s,
+            cost_per_sim_s: step_s / dt_s,
+            dyn_err_pct: max_err_pct,
+            period_err_pct: max_err_pct / 2.0,
+            damping_err_pct: max_err_pct / 4.0,
+            pareto_dynamic: false,
             static_s: 0.0,
             memory_bytes: 1000,
             avg_err_pct: max_err_pct / 5.0,
@@ -230,7 +279,14 @@ mod tests {
     }
 
     fn budget(max_force_error_pct: f64, rate_hz: f64) -> Budget {
-        Budget { max_force_error_pct, max_error_pct: None, metric: Metric::Max, rate_hz }
+        Budget {
+            max_force_error_pct,
+            max_error_pct: None,
+            metric: Metric::Max,
+            rate_hz,
+            max_period_error_pct: None,
+            max_damping_error_pct: None,
+        }
     }
 
     #[test]
@@ -251,9 +307,17 @@ mod tests {
         let c = choose(&points, "A", &budget(1.5, 1000.0));
         assert!(c.chosen.is_none());
         assert!(c.explanation.contains(&format!("cheapest is {FINE}")), "{}", c.explanation);
-        // At 10 Hz the fine model fits its tick.
+        // At 10 Hz the fine model's 100 ms implicit step fits its tick.
+        let mut points = points;
+        points.push(ChartPoint { dt_s: 0.1, cost_per_sim_s: 2e-3 / 0.1, ..points[3].clone() });
         let c = choose(&points, "A", &budget(1.5, 10.0));
-        assert_eq!(c.chosen.map(|p| p.model), Some(FINE));
+        assert_eq!(c.chosen.map(|p| p.model), Some(FINE), "{}", c.explanation);
+        // A dynamic budget: the implicit point's period error of 0.5 % fails 0.4 %.
+        let c = choose(&points, "A", &Budget { max_period_error_pct: Some(0.4), ..budget(6.0, 1000.0) });
+        assert_ne!(c.chosen.as_ref().map(|p| p.model), Some(IMPLICIT), "{}", c.explanation);
+        assert!(c.explanation.contains("period error 0.50 % > 0.4 %"), "{}", c.explanation);
+        let c = choose(&points, "A", &Budget { max_damping_error_pct: Some(0.2), ..budget(6.0, 1000.0) });
+        assert!(c.explanation.contains("damping error 0.25 % > 0.2 % of critical"), "{}", c.explanation);
         // A static bound on the paper's cases as well: the implicit point's 1 % fails 0.5 %.
         let c = choose(&points, "A", &Budget { max_error_pct: Some(0.5), ..budget(6.0, 10.0) });
         assert_eq!(c.chosen.map(|p| p.model), Some(FINE), "{}", c.explanation);

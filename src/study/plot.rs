@@ -1,4 +1,5 @@
-//! SVG charts of the study (plotters): error against time per step with the Pareto front, and
+//! SVG charts of the study (plotters): static and dynamic error against cost per simulated
+//! second with their Pareto fronts, and
 //! the measured against the analytic critical time step.
 
 use plotters::prelude::*;
@@ -29,23 +30,61 @@ fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     (lo / 1.5)..(hi * 1.5)
 }
 
-/// Average error (log) against time per step (log), one panel per object: colour = model,
-/// circle = explicit, triangle = implicit, label = resolution, the Pareto front joined.
-pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[ModelKind]) -> anyhow::Result<String> {
+/// Which error a speed-accuracy chart plots, and its Pareto front.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axis {
+    /// Static error on the paper's cases (average, % of h).
+    Static,
+    /// Dynamic error: the trajectory error against the FEM's transients (%, 8^3 only).
+    Dynamic,
+}
+
+impl Axis {
+    fn of(self, p: &ChartPoint) -> f64 {
+        match self {
+            Axis::Static => p.avg_err_pct,
+            Axis::Dynamic => p.dyn_err_pct,
+        }
+    }
+
+    fn on_front(self, p: &ChartPoint) -> bool {
+        match self {
+            Axis::Static => p.pareto,
+            Axis::Dynamic => p.pareto_dynamic,
+        }
+    }
+
+    fn describe(self) -> (&'static str, &'static str) {
+        match self {
+            Axis::Static => (
+                "Cost per simulated second against static error (circle: explicit at 0.9 of its critical step, \
+                 triangle: implicit; label: nodes per axis or step)",
+                "average static error vs fine FEM, % of h",
+            ),
+            Axis::Dynamic => (
+                "Cost per simulated second against dynamic error (8^3; circle: explicit at 0.9 of its critical step, \
+                 triangle: implicit, label: step in ms)",
+                "trajectory error vs converged FEM transients, %",
+            ),
+        }
+    }
+}
+
+/// `axis`'s error (log) against wall time per simulated second (log), one panel per object:
+/// colour = model, circle = explicit, triangle = implicit, the Pareto front joined.
+pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[ModelKind], axis: Axis) -> anyhow::Result<String> {
+    let points: Vec<ChartPoint> = points.iter().filter(|p| axis.of(p).is_finite()).cloned().collect();
+    let points = &points[..];
+    let (title, y_desc) = axis.describe();
     let mut objects: Vec<&str> = points.iter().map(|p| p.object.as_str()).collect();
     objects.dedup();
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (620 * objects.len().max(1) as u32, 520)).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
-        let root = root
-            .titled(
-                "Speed against accuracy (circle: explicit, triangle: implicit; label: nodes per axis)",
-                ("sans-serif", 17),
-            )
-            .map_err(err)?;
-        let x_range = log_range(points.iter().map(|p| p.step_s));
-        let y_range = log_range(points.iter().map(|p| p.avg_err_pct));
+        let root = root.titled(title, ("sans-serif", 14)).map_err(err)?;
+        let x_range = log_range(points.iter().map(|p| p.cost_per_sim_s));
+        let y_range = log_range(points.iter().map(|p| axis.of(p)));
         for (area, object) in root.split_evenly((1, objects.len().max(1))).iter().zip(&objects) {
             let mut chart = ChartBuilder::on(area)
                 .caption(format!("object {object}"), ("sans-serif", 16))
@@ -56,15 +95,15 @@ pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[ModelKind]) -> anyhow
                 .map_err(err)?;
             chart
                 .configure_mesh()
-                .x_desc("time per step, s (one thread)")
-                .y_desc("average error vs fine FEM, % of h")
+                .x_desc("wall time per simulated second, s (one thread)")
+                .y_desc(y_desc)
                 .x_label_formatter(&|v| format!("{v:.0e}"))
                 .y_label_formatter(&|v| format!("{v:.0e}"))
                 .draw()
                 .map_err(err)?;
             let mine: Vec<&ChartPoint> = points.iter().filter(|p| p.object == *object).collect();
             let mut front: Vec<(f64, f64)> =
-                mine.iter().filter(|p| p.pareto).map(|p| (p.step_s, p.avg_err_pct)).collect();
+                mine.iter().filter(|p| axis.on_front(p)).map(|p| (p.cost_per_sim_s, axis.of(p))).collect();
             front.sort_by(|a, b| a.0.total_cmp(&b.0));
             chart
                 .draw_series(LineSeries::new(front, BLACK.stroke_width(1)))
@@ -76,8 +115,8 @@ pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[ModelKind]) -> anyhow
                 let of_model: Vec<&&ChartPoint> = mine.iter().filter(|p| p.model == *model).collect();
                 chart
                     .draw_series(of_model.iter().map(|p| {
-                        let at = (p.step_s, p.avg_err_pct);
-                        let style = if p.pareto { colour.filled() } else { colour.stroke_width(2) };
+                        let at = (p.cost_per_sim_s, axis.of(p));
+                        let style = if axis.on_front(p) { colour.filled() } else { colour.stroke_width(2) };
                         let marker: DynElement<'_, SVGBackend<'_>, (f64, f64)> =
                             if p.integrator == ChartIntegrator::Explicit {
                                 Circle::new(at, 5, style).into_dyn()
@@ -90,8 +129,13 @@ pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[ModelKind]) -> anyhow
                     .label(model.name())
                     .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
                 chart
-                    .draw_series(of_model.iter().filter(|p| p.integrator == ChartIntegrator::Explicit).map(|p| {
-                        Text::new(format!("{}", p.n), (p.step_s, p.avg_err_pct), ("sans-serif", 11).into_font())
+                    .draw_series(of_model.iter().map(|p| {
+                        let label = match (axis, p.integrator) {
+                            (Axis::Static, ChartIntegrator::Explicit) => format!("{}", p.n),
+                            (Axis::Static, ChartIntegrator::Implicit) => String::new(),
+                            (Axis::Dynamic, _) => format!("{:.2}", p.dt_s * 1e3),
+                        };
+                        Text::new(label, (p.cost_per_sim_s, axis.of(p)), ("sans-serif", 10).into_font())
                     }))
                     .map_err(err)?;
             }

@@ -172,8 +172,13 @@ const MAX_CONTACT_ITERATIONS: usize = 50;
 impl SceneSolver {
     /// The pattern of `k` on the scene (factorise with [`SceneSolver::factor`]).
     pub fn new(grid: &Grid, k: &GroupedStiffness) -> Result<Self, SparseError> {
+        Self::with_fixed(grid, k, scene_fixed_dofs(grid))
+    }
+
+    /// The pattern of `k` with the dofs `fixed` held instead of the scene's clamp.
+    pub fn with_fixed(grid: &Grid, k: &GroupedStiffness, fixed: Vec<bool>) -> Result<Self, SparseError> {
         let (system, slots) = SpdSystem::new(3 * grid.num_nodes(), &k.entries)?;
-        Ok(Self { system, slots, fixed: scene_fixed_dofs(grid) })
+        Ok(Self { system, slots, fixed })
     }
 
     /// Assembles `K(theta)` with the clamped face eliminated and factorises it.

@@ -12,6 +12,21 @@ const TOLERANCE: f64 = 1e-12;
 
 /// The lowest `count` natural frequencies, Hz, ascending; `mass` per dof (kg), zero on fixed dofs.
 pub fn lowest_frequencies_hz(solver: &mut SceneSolver, mass: &[f64], count: usize) -> Result<Vec<f64>, SparseError> {
+    let modes = lowest_modes(solver, mass, count)?;
+    Ok(modes.iter().map(|m| m.omega / (2.0 * std::f64::consts::PI)).collect())
+}
+
+/// A natural mode: `K phi = omega^2 M phi`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mode {
+    /// Angular frequency, rad/s.
+    pub omega: f64,
+    /// Shape over all dofs, mass-normalised (`phi^T M phi = 1`), zero on fixed dofs.
+    pub shape: Vec<f64>,
+}
+
+/// The lowest `count` modes, ascending; `mass` per dof (kg), zero on fixed dofs.
+pub fn lowest_modes(solver: &mut SceneSolver, mass: &[f64], count: usize) -> Result<Vec<Mode>, SparseError> {
     let dofs = mass.len();
     let block = (2 * count).max(count + 8);
     // A deterministic, generic start: no eigenvector is orthogonal to all of these.
@@ -54,7 +69,8 @@ pub fn lowest_frequencies_hz(solver: &mut SceneSolver, mass: &[f64], count: usiz
             break;
         }
     }
-    Ok(values.iter().map(|w2| w2.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)).collect())
+    // The Ritz vectors are M-orthonormal (`Y^T M Y = L L^T`).
+    Ok(values.iter().zip(x).map(|(w2, shape)| Mode { omega: w2.max(0.0).sqrt(), shape }).collect())
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! mass-spring statics, calibration, stability, and the touch benchmark.
 
 mod calibration;
+mod dynamics;
 mod fem_reference;
 mod msm_statics;
 mod stability;

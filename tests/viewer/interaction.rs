@@ -9,6 +9,7 @@ fn script(actions: Vec<Action>) -> Script {
         model: tissue_sim::sim::ModelChoice::Lattice(tissue_sim::msm::Topology::Shear),
         dt: 1e-4,
         integrator: None,
+        damping_ratio: None,
         clamp: "bottom".into(),
         actions,
     }

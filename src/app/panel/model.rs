@@ -83,7 +83,9 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
     });
     validation(ui, shown, requests);
     if shown.fem.is_some() {
-        ui.label("The hex8 FEM (the reference itself): no spring parameters; damping as the default tissue's.");
+        ui.label(
+            "The hex8 FEM (the reference itself): no spring parameters; damped by the ratio set under Integrator.",
+        );
         return;
     }
     if shown.topology() == Topology::Axis {
@@ -114,9 +116,12 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
                 row(ui, name, v, 0.0);
             }
         }
-        ui.label("d");
-        changed |= ui.add(egui::DragValue::new(&mut p.d).speed(0.01).range(0.0..=1e4).suffix(" N s/m")).changed();
-        ui.end_row();
+        // Only the paper's lattice is damped by its nodal d; the others by the damping ratio.
+        if p.topology() == Topology::Axis {
+            ui.label("d");
+            changed |= ui.add(egui::DragValue::new(&mut p.d).speed(0.01).range(0.0..=1e4).suffix(" N s/m")).changed();
+            ui.end_row();
+        }
     });
     if changed {
         requests.push(Request::EditParams(p));
