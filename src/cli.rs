@@ -872,6 +872,8 @@ fn dynamics_text(r: &crate::dynamic::measure::DynamicReport, note: Option<&str>)
     if let Some(n) = note {
         t += &format!("note: {n}\n");
     }
+    let list = |v: &[f64]| v.iter().map(|f| format!("{f:.2}")).collect::<Vec<_>>().join(", ");
+    t += &format!("lowest modes, Hz: model {}; FEM {}\n", list(&r.modes_hz), list(&r.fem_modes_hz));
     t += &format!(
         "fundamental period: measured {:.4} ms, own modal {:.4} ms (error {:.3} %), FEM {:.4} ms (error {:.3} %)\n",
         1e3 * r.measured_period_s,
@@ -895,8 +897,10 @@ fn dynamics_text(r: &crate::dynamic::measure::DynamicReport, note: Option<&str>)
         );
     }
     for e in &r.transients {
+        let what =
+            if e.transient == crate::dynamic::reference::Transient::ProbeTap { "probe force" } else { "loaded face" };
         t += &format!(
-            "trajectory error, {}: {:.3} % (FEM reference: Newmark, converged at {} s)\n",
+            "trajectory error ({what}), {}: {:.3} % (FEM reference: Newmark, converged at {} s)\n",
             e.transient.name(),
             100.0 * e.error,
             crate::io::num(e.reference_step_s)

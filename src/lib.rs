@@ -13,6 +13,8 @@
 //!   safe output files).
 //! - [`touch`]: the touch benchmark (held-out point, shear and probe touches, modes) behind
 //!   `validate`.
+//! - [`dynamic`]: damping as a ratio at the fundamental, the integrators' closed forms on one
+//!   mode, the converged FEM transients and the dynamic measurement behind `dynamics`.
 //! - Studies: [`study`] (speed against accuracy, stability, choice), [`reproduce`] (the paper's
 //!   tables and figures), [`bench`](mod@bench) (timings), [`script`] (`simulate`).
 //! - Presentation: [`render`] (wgpu renderer, offscreen), [`scene`] (what is drawn).

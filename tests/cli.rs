@@ -393,8 +393,8 @@ fn chart_files_are_checked_and_an_interrupted_chart_leaves_no_directory() {
     std::fs::write(
         &bad,
         "object,model,n,integrator,step_s,dt_max_s,dt_s,cost_per_sim_s,static_s,memory_bytes,avg_err_pct,max_err_pct,\
-         force_err_pct,dyn_err_pct,period_err_pct,damping_err_pct,pareto,pareto_dynamic\n\
-         A,msm-hex,4,explicit,-7,1e-3,9e-4,1e-3,1e-3,100,0.5,1.0,NaN,NaN,NaN,NaN,true,false\n",
+         force_err_pct,dyn_err_pct,tap_err_pct,period_err_pct,damping_err_pct,pareto,pareto_dynamic\n\
+         A,msm-hex,4,explicit,-7,1e-3,9e-4,1e-3,1e-3,100,0.5,1.0,NaN,NaN,NaN,NaN,NaN,true,false\n",
     )
     .expect("write");
     let o = run(&["choose", "--chart", bad.to_str().expect("utf8"), "--max-error", "5"]);
@@ -551,6 +551,7 @@ fn dynamics_prints_the_contract_and_refuses_bad_input() {
         "measured_period_s",
         "measured_damping_ratio",
         "trajectory_error",
+        "probe_tap_error",
     ] {
         assert!(!v[key].is_null(), "key {key} missing: {v}");
     }

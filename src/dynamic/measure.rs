@@ -10,7 +10,9 @@
 //!   ([`super::single_mode::from_recurrence`]). They are compared with the model's own damped
 //!   fundamental (integrator error) and with the FEM's (model error).
 //! * **Trajectory error:** each reference transient ([`super::reference`]) run on the model
-//!   with the same load, the relative L2 in time of the loaded face's displacement.
+//!   with the same load, the relative L2 in time of the loaded face's displacement; the probe tap
+//!   run in the viewer's simulation (its contact and force readout), the relative L2 of the
+//!   force on the probe.
 
 use super::damping::Damping;
 use super::modal::{ModalModel, Mode};
@@ -44,6 +46,8 @@ pub struct References {
     pub scene: LoadCase,
     /// The FEM's fundamental on the scene, rad/s.
     pub fem_omega_1: f64,
+    /// The FEM's lowest [`MODES`] natural frequencies on the scene, Hz (lumped masses).
+    pub fem_modes_hz: Vec<f64>,
     /// The converged transients.
     pub transients: Vec<ReferenceTransient>,
 }
@@ -55,13 +59,30 @@ impl References {
         let grid = Grid::paper();
         let scene = reference::view_scene(&grid);
         let fem = ModalModel::fem(&crate::fem::FemModel::new(grid, material), material.density);
+        let fixed = crate::touch::linear::scene_fixed_dofs(&grid);
+        let fem_modes_hz = hz(&fem.modes(&fixed, MODES)?);
         let fem_omega_1 = super::modal::scene_fundamental(&fem).map_err(|e| anyhow::anyhow!("{e}"))?;
         let transients = Transient::ALL
             .iter()
             .map(|&t| reference::converged(material, grid, &scene, zeta, t))
             .collect::<anyhow::Result<Vec<_>>>()?;
-        Ok(Self { object: material.name.clone(), material: material.clone(), zeta, scene, fem_omega_1, transients })
+        Ok(Self {
+            object: material.name.clone(),
+            material: material.clone(),
+            zeta,
+            scene,
+            fem_omega_1,
+            fem_modes_hz,
+            transients,
+        })
     }
+}
+
+/// How many of the lowest modes a report lists.
+pub const MODES: usize = 6;
+
+fn hz(modes: &[Mode]) -> Vec<f64> {
+    modes.iter().map(|m| m.omega / (2.0 * std::f64::consts::PI)).collect()
 }
 
 /// One model, integrator and step, measured (`tissue-sim dynamics --json`).
@@ -87,8 +108,12 @@ pub struct DynamicReport {
     /// Damping ratio measured by time stepping.
     pub measured_damping_ratio: f64,
     /// The worst relative L2 error in time of the loaded face's displacement against the FEM's
-    /// reference transients ([`DynamicReport::transients`]) over their first 0.2 s.
+    /// reference transients (the step load and the release, [`DynamicReport::transients`]) over
+    /// their first 0.2 s.
     pub trajectory_error: f64,
+    /// The relative L2 error in time of the force on the probe in the 20 ms tap, run in the
+    /// viewer's simulation (its contact and force readout), against the FEM's converged tap.
+    pub probe_tap_error: f64,
     /// `|measured / modal period - 1|`: the integrator's period error.
     pub period_error: f64,
     /// `|measured - set damping ratio|`, in units of critical: the integrator's damping error.
@@ -102,6 +127,10 @@ pub struct DynamicReport {
     pub fit_residual: f64,
     /// The model's undamped fundamental period `2 pi / omega_1`, s.
     pub modal_undamped_period_s: f64,
+    /// The model's lowest [`MODES`] natural frequencies on the scene, Hz (lumped masses).
+    pub modes_hz: Vec<f64>,
+    /// The FEM's, Hz.
+    pub fem_modes_hz: Vec<f64>,
     /// Each transient's trajectory error.
     pub transients: Vec<TransientError>,
 }
@@ -109,9 +138,10 @@ pub struct DynamicReport {
 /// The trajectory error of one transient.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct TransientError {
-    /// `step_load` or `release`.
+    /// `step_load`, `release` or `probe_tap`.
     pub transient: Transient,
-    /// Relative L2 in time of the loaded face's displacement.
+    /// Relative L2 in time of the loaded face's displacement (of the probe force for the tap);
+    /// infinite when the blow-up guard stopped the run.
     pub error: f64,
     /// The reference's converged Newmark step, s.
     pub reference_step_s: f64,
@@ -162,7 +192,8 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
     let zeta = refs.zeta;
     let modal = modal_model(material, config.model, config.params)?;
     let fixed = crate::touch::linear::scene_fixed_dofs(&Grid::paper());
-    let mode = modal.fundamental(&fixed)?;
+    let modes = modal.modes(&fixed, MODES)?;
+    let mode = modes.first().cloned().ok_or(crate::sparse::SparseError::NotPositiveDefinite)?;
     let mut tissue = config.model.build(material, config.params, zeta)?;
     let Damping::Ratio { omega_1, .. } = tissue.damping() else {
         anyhow::bail!("the model is not damped by a ratio");
@@ -173,12 +204,22 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
     let fem_period_s = damped(refs.fem_omega_1);
     let mut transients = Vec::new();
     for r in &refs.transients {
-        let run = trajectory(tissue.as_mut(), &modal, &refs.scene, r.transient, config)?;
-        let error = run.relative_error(&r.trajectory);
+        let run = match r.transient {
+            Transient::ProbeTap => tap(material, zeta, config)?,
+            t => Some(trajectory(tissue.as_mut(), &modal, &refs.scene, t, config)?),
+        };
+        // A run the blow-up guard had to stop has no trajectory: an infinite error.
+        let error = run.map_or(f64::INFINITY, |run| run.relative_error(&r.trajectory));
         transients.push(TransientError { transient: r.transient, error, reference_step_s: r.trajectory.dt });
     }
-    let trajectory_error =
-        transients.iter().map(|t| t.error).fold(0.0, |a: f64, b| if b.is_nan() { b } else { a.max(b) });
+    let worst = |tap: bool| {
+        transients
+            .iter()
+            .filter(|t| (t.transient == Transient::ProbeTap) == tap)
+            .map(|t| t.error)
+            .fold(0.0, |a: f64, b| if b.is_nan() { b } else { a.max(b) })
+    };
+    let (trajectory_error, probe_tap_error) = (worst(false), worst(true));
     Ok(DynamicReport {
         object: refs.object.clone(),
         model: config.model.name(),
@@ -190,12 +231,15 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
         measured_period_s: motion.period_s,
         measured_damping_ratio: motion.damping_ratio,
         trajectory_error,
+        probe_tap_error,
         period_error: single_mode::period_error(motion.period_s, modal_period_s),
         damping_error: (motion.damping_ratio - zeta).abs(),
         fem_period_error: single_mode::period_error(motion.period_s, fem_period_s),
         predicted: single_mode::discrete(scheme(config.integrator), omega_1, 2.0 * zeta * omega_1, config.dt),
         fit_residual,
         modal_undamped_period_s: 2.0 * std::f64::consts::PI / omega_1,
+        modes_hz: hz(&modes),
+        fem_modes_hz: refs.fem_modes_hz.clone(),
         transients,
     })
 }
@@ -261,6 +305,33 @@ fn release(
     Ok(fit_recurrence(&q, config.dt))
 }
 
+/// The viewer's probe tap ([`reference::tap_centre`]) on the model in the viewer's simulation
+/// (its contact, its force readout): the magnitude of the force on the probe at every step, or
+/// `None` when the blow-up guard stopped it.
+fn tap(material: &Material, zeta: f64, config: Configuration) -> anyhow::Result<Option<Trajectory>> {
+    let tissue = config.model.build(material, config.params, zeta)?;
+    let grid = tissue.grid();
+    let clamp = LoadCase::bottom_clamp(&grid, "view");
+    let mut sim = crate::sim::Simulation::with_tissue(tissue, config.integrator, config.dt, Some(&clamp));
+    let steps = steps_for(reference::DURATION_S, config.dt)?;
+    let mut samples = Vec::with_capacity(steps + 1);
+    samples.push(vec![0.0]);
+    // Once the probe has let go nothing pushes on it: zero force from then on.
+    let stepped = steps_for(reference::TAP_DURATION_S, config.dt)?.saturating_add(1).min(steps);
+    for k in 1..=stepped {
+        sim.tool = match reference::tap_centre(&grid, k as f64 * config.dt) {
+            Some(centre) => crate::sim::Tool::Probe { centre, radius: crate::touch::PROBE_RADIUS_M },
+            None => crate::sim::Tool::None,
+        };
+        if sim.step().is_err() {
+            return Ok(None);
+        }
+        samples.push(vec![sim.tool_force.iter().map(|c| c * c).sum::<f64>().sqrt()]);
+    }
+    samples.resize(steps + 1, vec![0.0]);
+    Ok(Some(Trajectory { dt: config.dt, samples }))
+}
+
 /// Least-squares fit of `q_{n+1} = a q_n - b q_{n-1}`: the motion of `(a, b)` (NaN when it has
 /// none: unstable or not oscillating in a continuous way) and the relative residual.
 pub fn fit_recurrence(q: &[f64], dt: f64) -> (ModeMotion, f64) {
@@ -298,7 +369,7 @@ fn trajectory(
     let dofs = reference::loaded_dofs(scene);
     let n = scene.load.len();
     match transient {
-        Transient::StepLoad => start(tissue, scene, &vec![0.0; n]),
+        Transient::StepLoad | Transient::ProbeTap => start(tissue, scene, &vec![0.0; n]),
         Transient::Release => {
             let u = modal.static_shape(scene)?;
             let mut unloaded = scene.clone();

@@ -170,6 +170,9 @@ pub struct ChartPoint {
     /// viewer scene's top-face step load and its release, first 0.2 s), percent; model and
     /// integrator together. At the viewer's 8^3 only (NaN elsewhere), as the touch scores.
     pub dyn_err_pct: f64,
+    /// The probe tap's force error (run in the viewer's simulation, its contact and readout)
+    /// against the FEM's converged tap, percent (8^3 only).
+    pub tap_err_pct: f64,
     /// The integrator's period error on the model's own fundamental, measured by time stepping,
     /// percent (8^3 only).
     pub period_err_pct: f64,
@@ -263,6 +266,7 @@ impl PointBase<'_> {
             max_err_pct: self.max,
             force_err_pct: self.force,
             dyn_err_pct: pct(|d| d.trajectory_error),
+            tap_err_pct: pct(|d| d.probe_tap_error),
             period_err_pct: pct(|d| d.period_error),
             damping_err_pct: pct(|d| d.damping_error),
             pareto: false,

@@ -266,6 +266,7 @@ mod tests {
             dt_s,
             cost_per_sim_s: step_s / dt_s,
             dyn_err_pct: max_err_pct,
+            tap_err_pct: max_err_pct,
             period_err_pct: max_err_pct / 2.0,
             damping_err_pct: max_err_pct / 4.0,
             pareto_dynamic: false,

@@ -45,12 +45,19 @@ fn reference_transients_converge_at_second_order() {
     let grid = Grid::paper();
     for case in [view_scene(&grid), reference::paper_scene(&grid, "B", 1)] {
         for t in Transient::ALL {
+            if t == Transient::ProbeTap && case.id != "view_top_shear_x" {
+                continue; // the tap is the viewer scene's
+            }
             let r = reference::converged(&material, grid, &case, ZETA, t).expect("converges");
             let changes: Vec<f64> = r.history.iter().skip(1).map(|h| h.1).collect();
             let last = *changes.last().expect("halved at least once");
             assert!(last < reference::CONVERGED, "{}: {:?}", case.id, r.history);
-            // Newmark is second order: each halving cuts the change about four times.
-            if changes.len() >= 2 {
+            assert!(changes[changes.len() - 2] < reference::CONVERGED, "{}: {:?}", case.id, r.history);
+            // Newmark is second order: each halving cuts the change about four times (the tap's
+            // contact events make it first order and irregular: only overall decrease).
+            if t == Transient::ProbeTap {
+                assert!(changes[0] > 5.0 * last, "{}: {:?}", case.id, r.history);
+            } else if changes.len() >= 2 {
                 let ratio = changes[changes.len() - 2] / last;
                 assert!((3.0..5.0).contains(&ratio), "{} {t:?}: {:?}", case.id, r.history);
             }
