@@ -289,6 +289,10 @@ pub enum Command {
         /// Damping ratio at the fundamental (mass-proportional).
         #[arg(long, default_value_t = crate::dynamic::damping::DEFAULT_DAMPING_RATIO, allow_hyphen_values = true)]
         damping_ratio: f64,
+        /// The scene of the trajectories and modes: the viewer's (face z = 0 clamped, a 1 N
+        /// top-face shear, the probe tap) or the paper's clamped case along axis 1, 2 or 3 (10 N).
+        #[arg(long, default_value = "view", value_parser = ["view", "clamped-1", "clamped-2", "clamped-3"])]
+        scene: String,
         /// Print JSON (the contract) instead of text.
         #[arg(long)]
         json: bool,
@@ -548,8 +552,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             };
             validate_command(&object, label, &grid, params, model.as_deref(), json)
         }
-        Some(Command::Dynamics { object, params, model, integrator, dt, damping_ratio, json }) => {
-            dynamics_command(&object, params, model.as_deref(), integrator, dt, damping_ratio, json)
+        Some(Command::Dynamics { object, params, model, integrator, dt, damping_ratio, scene, json }) => {
+            let config = (integrator, dt, damping_ratio);
+            dynamics_command(&object, params, model.as_deref(), config, &scene, json)
         }
         Some(Command::Bench { json }) => {
             let report = crate::bench::run()?;
@@ -806,9 +811,8 @@ fn dynamics_command(
     object: &str,
     params: Option<PathBuf>,
     model: Option<&str>,
-    integrator: Option<Integrator>,
-    dt: f64,
-    zeta: f64,
+    (integrator, dt, zeta): (Option<Integrator>, f64, f64),
+    scene: &str,
     json: bool,
 ) -> anyhow::Result<()> {
     use crate::sim::ModelChoice;
@@ -847,7 +851,12 @@ fn dynamics_command(
     if matches!(choice, ModelChoice::Fem(_)) && integrator == crate::sim::Integrator::Implicit {
         anyhow::bail!("dynamics: the FEM models step with symplectic or prefactored implicit Euler, not implicit");
     }
-    let refs = crate::dynamic::measure::References::new(&material, zeta)?;
+    let grid = Grid::paper();
+    let scene = match scene.strip_prefix("clamped-").and_then(|a| a.parse::<usize>().ok()) {
+        Some(axis) => crate::dynamic::reference::paper_scene(&grid, &material.name, axis),
+        None => crate::dynamic::reference::view_scene(&grid),
+    };
+    let refs = crate::dynamic::measure::References::with_scene(&material, zeta, scene)?;
     let config = crate::dynamic::measure::Configuration { model: choice, params: p, integrator, dt };
     let report = crate::dynamic::measure::measure(&refs, config)
         .with_context(|| format!("measuring {} with {} at dt = {} s", choice.name(), integrator.name(), dt))?;
@@ -861,13 +870,14 @@ fn dynamics_command(
 
 fn dynamics_text(r: &crate::dynamic::measure::DynamicReport, note: Option<&str>) -> String {
     let mut t = format!(
-        "Dynamics: object {}, model {}, {} at dt = {} s, damping ratio {} at the fundamental (mass-proportional); \
-         viewer scene (face z = 0 clamped)\n",
+        "Dynamics: object {}, model {}, {} at dt = {} s, damping ratio {} at the fundamental (mass-proportional, \
+         the viewer's scene: face z = 0 clamped); trajectories and modes: {}\n",
         r.object,
         r.model,
         r.integrator,
         crate::io::num(r.dt_s),
-        r.damping_ratio_set
+        r.damping_ratio_set,
+        r.scene
     );
     if let Some(n) = note {
         t += &format!("note: {n}\n");

@@ -569,6 +569,12 @@ fn dynamics_prints_the_contract_and_refuses_bad_input() {
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("model hex, symplectic at dt = 0.0001 s"), "{text}");
+    // The paper's clamped case as the scene: its step load and release, no tap.
+    let o = run(&["dynamics", "--object", "A", "--scene", "clamped-1", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(v["scene"], "A_clamped_ax1_F10");
+    assert_eq!(v["transients"].as_array().map(Vec::len), Some(2), "{v}");
     for (bad, why) in [
         (vec!["dynamics", "--object", "A", "--model", "axis"], "nodal damping d"),
         (vec!["dynamics", "--object", "A", "--dt", "0"], "--dt"),

@@ -56,14 +56,24 @@ impl References {
     /// The FEM's fundamental and converged transients of `material` on the viewer's 8^3 scene,
     /// damped by `zeta`.
     pub fn new(material: &Material, zeta: f64) -> anyhow::Result<Self> {
+        Self::with_scene(material, zeta, reference::view_scene(&Grid::paper()))
+    }
+
+    /// The same on another 8^3 `scene` (a clamp and a load, e.g. [`reference::paper_scene`]):
+    /// its step load and release (the probe tap belongs to the viewer's scene only), and its
+    /// modes; the damping ratio stays set at the viewer scene's fundamental.
+    pub fn with_scene(material: &Material, zeta: f64, scene: LoadCase) -> anyhow::Result<Self> {
         let grid = Grid::paper();
-        let scene = reference::view_scene(&grid);
+        if scene.load.len() != 3 * grid.num_nodes() {
+            anyhow::bail!("scene {} is not on the viewer's {}^3 grid", scene.id, grid.n());
+        }
         let fem = ModalModel::fem(&crate::fem::FemModel::new(grid, material), material.density);
-        let fixed = crate::touch::linear::scene_fixed_dofs(&grid);
-        let fem_modes_hz = hz(&fem.modes(&fixed, MODES)?);
+        let fem_modes_hz = hz(&fem.modes(&scene.fixed, MODES)?);
         let fem_omega_1 = super::modal::scene_fundamental(&fem).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let is_view = scene.fixed == crate::touch::linear::scene_fixed_dofs(&grid);
         let transients = Transient::ALL
             .iter()
+            .filter(|&&t| is_view || t != Transient::ProbeTap)
             .map(|&t| reference::converged(material, grid, &scene, zeta, t))
             .collect::<anyhow::Result<Vec<_>>>()?;
         Ok(Self {
@@ -127,7 +137,11 @@ pub struct DynamicReport {
     pub fit_residual: f64,
     /// The model's undamped fundamental period `2 pi / omega_1`, s.
     pub modal_undamped_period_s: f64,
-    /// The model's lowest [`MODES`] natural frequencies on the scene, Hz (lumped masses).
+    /// The scene (`view_top_shear_x`, or a paper case id): its clamp and load give the modes and
+    /// the trajectories; the period and damping are measured on the viewer's scene, where the
+    /// ratio is set.
+    pub scene: String,
+    /// The model's lowest [`MODES`] natural frequencies on the scene's clamp, Hz (lumped masses).
     pub modes_hz: Vec<f64>,
     /// The FEM's, Hz.
     pub fem_modes_hz: Vec<f64>,
@@ -192,8 +206,8 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
     let zeta = refs.zeta;
     let modal = modal_model(material, config.model, config.params)?;
     let fixed = crate::touch::linear::scene_fixed_dofs(&Grid::paper());
-    let modes = modal.modes(&fixed, MODES)?;
-    let mode = modes.first().cloned().ok_or(crate::sparse::SparseError::NotPositiveDefinite)?;
+    let mode = modal.fundamental(&fixed)?;
+    let modes = modal.modes(&refs.scene.fixed, MODES)?;
     let mut tissue = config.model.build(material, config.params, zeta)?;
     let Damping::Ratio { omega_1, .. } = tissue.damping() else {
         anyhow::bail!("the model is not damped by a ratio");
@@ -238,6 +252,7 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
         predicted: single_mode::discrete(scheme(config.integrator), omega_1, 2.0 * zeta * omega_1, config.dt),
         fit_residual,
         modal_undamped_period_s: 2.0 * std::f64::consts::PI / omega_1,
+        scene: refs.scene.id.clone(),
         modes_hz: hz(&modes),
         fem_modes_hz: refs.fem_modes_hz.clone(),
         transients,
