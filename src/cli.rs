@@ -882,7 +882,7 @@ fn dynamics_text(r: &crate::dynamic::measure::DynamicReport, note: Option<&str>)
     if let Some(n) = note {
         t += &format!("note: {n}\n");
     }
-    let list = |v: &[f64]| v.iter().map(|f| format!("{f:.2}")).collect::<Vec<_>>().join(", ");
+    let list = crate::touch::score::frequency_list;
     t += &format!("lowest modes, Hz: model {}; FEM {}\n", list(&r.modes_hz), list(&r.fem_modes_hz));
     t += &format!(
         "fundamental period: measured {:.4} ms, own modal {:.4} ms (error {:.3} %), FEM {:.4} ms (error {:.3} %)\n",

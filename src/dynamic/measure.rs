@@ -174,14 +174,6 @@ pub struct Configuration {
     pub dt: f64,
 }
 
-/// The scheme of an integrator on a linear model.
-pub fn scheme(integrator: Integrator) -> single_mode::Scheme {
-    match integrator {
-        Integrator::Symplectic => single_mode::Scheme::Symplectic,
-        Integrator::Implicit | Integrator::Prefactored => single_mode::Scheme::BackwardEuler,
-    }
-}
-
 /// The model's rest stiffness and masses.
 pub fn modal_model(material: &Material, model: ModelChoice, params: Option<MsmParams>) -> anyhow::Result<ModalModel> {
     let grid = Grid::paper();
@@ -249,7 +241,7 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
         period_error: single_mode::period_error(motion.period_s, modal_period_s),
         damping_error: (motion.damping_ratio - zeta).abs(),
         fem_period_error: single_mode::period_error(motion.period_s, fem_period_s),
-        predicted: single_mode::discrete(scheme(config.integrator), omega_1, 2.0 * zeta * omega_1, config.dt),
+        predicted: single_mode::discrete(config.integrator.scheme(), omega_1, 2.0 * zeta * omega_1, config.dt),
         fit_residual,
         modal_undamped_period_s: 2.0 * std::f64::consts::PI / omega_1,
         scene: refs.scene.id.clone(),

@@ -257,60 +257,14 @@ fn contact(
     centre: [f64; 3],
     u: &mut [f64],
 ) -> Result<Vec<(usize, [f64; 3])>, SparseError> {
+    use crate::touch::linear::{contact_active_set, sphere_geometry};
     let radius = crate::touch::PROBE_RADIUS_M;
-    let geometry: Vec<([f64; 3], f64)> = (0..grid.num_nodes())
-        .map(|p| {
-            let x = grid.position(p);
-            let d = [x[0] - centre[0], x[1] - centre[1], x[2] - centre[2]];
-            let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            let n = if dist > 1e-12 { d.map(|c| c / dist) } else { [0.0, 0.0, 1.0] };
-            (n, radius - dist)
-        })
-        .collect();
-    let normal_u = |u: &[f64], p: usize| (0..3).map(|c| geometry[p].0[c] * u[3 * p + c]).sum::<f64>();
-    let base = u.to_vec();
-    let violated = |u: &[f64], p: usize| !fixed[3 * p] && normal_u(u, p) < geometry[p].1 - 1e-12 * radius;
-    let mut active: Vec<usize> = (0..grid.num_nodes()).filter(|&p| violated(&base, p)).collect();
-    let mut columns: std::collections::HashMap<usize, Vec<f64>> = std::collections::HashMap::new();
-    let mut solved: Vec<(usize, f64)> = Vec::new();
-    for _ in 0..MAX_CONTACT_ITERATIONS {
-        u.copy_from_slice(&base);
-        solved.clear();
-        if active.is_empty() {
-            break;
-        }
-        for &p in &active {
-            if let std::collections::hash_map::Entry::Vacant(e) = columns.entry(p) {
-                let mut w = vec![0.0; u.len()];
-                w[3 * p..3 * p + 3].copy_from_slice(&geometry[p].0);
-                system.solve_in_place(&mut w)?;
-                e.insert(w);
-            }
-        }
-        let m = active.len();
-        let s = nalgebra::DMatrix::from_fn(m, m, |i, j| normal_u(&columns[&active[j]], active[i]));
-        let g = nalgebra::DVector::from_iterator(m, active.iter().map(|&p| geometry[p].1 - normal_u(&base, p)));
-        let lambda = s.cholesky().ok_or(SparseError::NotPositiveDefinite)?.solve(&g);
-        for (&p, &l) in active.iter().zip(lambda.iter()) {
-            solved.push((p, l));
-            for (ud, wd) in u.iter_mut().zip(&columns[&p]) {
-                *ud += l * wd;
-            }
-        }
-        // Keep pushing contacts; add free nodes that end inside the sphere.
-        let mut next: Vec<usize> = solved.iter().filter(|(_, l)| *l > 0.0).map(|(p, _)| *p).collect();
-        next.extend((0..grid.num_nodes()).filter(|p| !active.contains(p) && violated(u, *p)));
-        next.sort_unstable();
-        if next == active {
-            break;
-        }
-        active = next;
-    }
-    Ok(solved.iter().filter(|(_, l)| *l > 0.0).map(|&(p, _)| (p, geometry[p].0)).collect())
+    let geometry = sphere_geometry(grid, centre, radius);
+    let free: Vec<bool> = (0..grid.num_nodes()).map(|p| !fixed[3 * p]).collect();
+    let solved = contact_active_set(&mut |w| system.solve_in_place(w), u, &geometry, &free, radius)?;
+    u.copy_from_slice(&solved.u);
+    Ok(solved.solved.iter().zip(&solved.lambda).filter(|(_, l)| **l > 0.0).map(|(&p, _)| (p, geometry[p].0)).collect())
 }
-
-/// Active-set iterations of a step's contact solve.
-const MAX_CONTACT_ITERATIONS: usize = 50;
 
 /// The converged FEM `transient` of `case` (on `grid`) for `material`, damped by `zeta` at the FEM's own
 /// fundamental on the viewer's scene.

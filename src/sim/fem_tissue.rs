@@ -45,7 +45,7 @@ impl FemTissue {
             dt_limit,
             total_mass: dynamics.mass.iter().sum::<f64>() / 3.0,
             density: material.density,
-            damping: Damping::Ratio { zeta: 0.0, omega_1: f64::NAN },
+            damping: Damping::Nodal(0.0),
             dynamics,
         }
     }
@@ -169,7 +169,7 @@ impl Tissue for FemTissue {
     }
     fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String> {
         let zeta = crate::dynamic::damping::check_ratio(zeta)?;
-        let omega_1 = match self.damping.omega_1().filter(|w| w.is_finite()) {
+        let omega_1 = match self.damping.omega_1() {
             Some(w) => w,
             None => crate::dynamic::modal::scene_fundamental(&crate::dynamic::modal::ModalModel::fem(
                 &self.dynamics.model,

@@ -104,6 +104,14 @@ pub enum Integrator {
 }
 
 impl Integrator {
+    /// What the integrator is on a linear model's mode ([`crate::dynamic::single_mode`]).
+    pub fn scheme(self) -> crate::dynamic::single_mode::Scheme {
+        match self {
+            Integrator::Symplectic => crate::dynamic::single_mode::Scheme::Symplectic,
+            Integrator::Implicit | Integrator::Prefactored => crate::dynamic::single_mode::Scheme::BackwardEuler,
+        }
+    }
+
     /// The lower-case name used on the command line and in files.
     pub fn name(self) -> &'static str {
         match self {
@@ -180,7 +188,7 @@ pub fn predicted_error(integrator: Integrator, h: f64, damping: Damping) -> Opti
     let zeta = damping.ratio()?;
     let gamma = 2.0 * zeta * omega;
     let want = crate::dynamic::single_mode::exact(omega, gamma);
-    let got = crate::dynamic::single_mode::discrete(crate::dynamic::measure::scheme(integrator), omega, gamma, h)?;
+    let got = crate::dynamic::single_mode::discrete(integrator.scheme(), omega, gamma, h)?;
     Some((
         crate::dynamic::single_mode::period_error(got.period_s, want.period_s),
         (got.damping_ratio - want.damping_ratio).abs(),

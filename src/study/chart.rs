@@ -604,9 +604,8 @@ fn damping_rate(material: &Material, kind: ModelKind) -> anyhow::Result<f64> {
         ModelKind::Msm(t) => crate::sim::ModelChoice::Lattice(t),
         ModelKind::Fem(f) => crate::sim::ModelChoice::Fem(f),
     };
-    let modal = crate::dynamic::measure::modal_model(material, choice, None)?;
-    let omega = crate::dynamic::modal::scene_fundamental(&modal).map_err(|e| anyhow::anyhow!("{e}"))?;
-    Ok(crate::dynamic::damping::mass_proportional_rate(CHART_DAMPING_RATIO, omega))
+    // The running tissue's own rate (its one home: `Tissue::set_damping_ratio`).
+    Ok(choice.build(material, None, CHART_DAMPING_RATIO)?.damping().rate())
 }
 
 /// The FEM's dynamic reference of `material` at the chart's damping ratio, with a note on how

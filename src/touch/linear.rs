@@ -207,70 +207,11 @@ impl SceneSolver {
     /// pulls and no free node ends inside.
     pub fn probe(&mut self, grid: &Grid, centre: [f64; 3], radius: f64) -> Result<ProbeAnswer, SparseError> {
         let nn = grid.num_nodes();
-        let geometry: Vec<([f64; 3], f64)> = (0..nn)
-            .map(|p| {
-                let x = grid.position(p);
-                let d = [x[0] - centre[0], x[1] - centre[1], x[2] - centre[2]];
-                let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                let n = if dist > 1e-12 { d.map(|c| c / dist) } else { [0.0, 0.0, 1.0] };
-                (n, radius - dist)
-            })
-            .collect();
+        let geometry = sphere_geometry(grid, centre, radius);
         let free_nodes: Vec<bool> = (0..nn).map(|p| !self.fixed[3 * p]).collect();
-        let free = |p: usize| free_nodes[p];
-        let mut active: Vec<usize> = (0..nn).filter(|&p| free(p) && geometry[p].1 > 0.0).collect();
-        let mut u = vec![0.0; 3 * nn];
-        // The last solved set: its unit-force responses, its contact forces and the Cholesky of
-        // its normal compliance.
-        let mut solved: Vec<usize> = Vec::new();
-        let mut columns: Vec<Vec<f64>> = Vec::new();
-        let mut lambda: Vec<f64> = Vec::new();
-        let mut chol = None;
-        for _ in 0..MAX_CONTACT_ITERATIONS {
-            u.fill(0.0);
-            solved.clone_from(&active);
-            columns.clear();
-            lambda.clear();
-            chol = None;
-            if active.is_empty() {
-                break;
-            }
-            // Unit normal forces at each contact node, and the normal displacements they cause.
-            let m = active.len();
-            for &p in &active {
-                let mut w = vec![0.0; 3 * nn];
-                w[3 * p..3 * p + 3].copy_from_slice(&geometry[p].0);
-                self.solve(&mut w)?;
-                columns.push(w);
-            }
-            let s = nalgebra::DMatrix::from_fn(m, m, |i, j| {
-                let (p, n) = (active[i], geometry[active[i]].0);
-                (0..3).map(|c| n[c] * columns[j][3 * p + c]).sum::<f64>()
-            });
-            let g = nalgebra::DVector::from_iterator(m, active.iter().map(|&p| geometry[p].1));
-            let factor = s.cholesky().ok_or(SparseError::NotPositiveDefinite)?;
-            lambda.extend(factor.solve(&g).iter().copied());
-            chol = Some(factor);
-            for (col, &l) in columns.iter().zip(&lambda) {
-                for (ud, wd) in u.iter_mut().zip(col) {
-                    *ud += l * wd;
-                }
-            }
-            // Keep pushing contacts; add free nodes that end inside the sphere.
-            let mut next: Vec<usize> = active.iter().zip(&lambda).filter(|(_, l)| **l > 0.0).map(|(p, _)| *p).collect();
-            for p in (0..nn).filter(|&p| free(p) && !active.contains(&p)) {
-                let (n, gap) = geometry[p];
-                let un = (0..3).map(|c| n[c] * u[3 * p + c]).sum::<f64>();
-                if un < gap - 1e-12 * radius {
-                    next.push(p);
-                }
-            }
-            next.sort_unstable();
-            if next == active {
-                break;
-            }
-            active = next;
-        }
+        let zero = vec![0.0; 3 * nn];
+        let ContactSolve { u, solved, lambda, columns, chol } =
+            contact_active_set(&mut |w| self.solve(w), &zero, &geometry, &free_nodes, radius)?;
         let mut force = [0.0; 3];
         for (&p, &l) in solved.iter().zip(&lambda) {
             for c in 0..3 {
@@ -280,6 +221,97 @@ impl SceneSolver {
         let sensitivity = probe_sensitivity(&force, &solved, &geometry, &columns, chol.as_ref(), 3 * nn);
         Ok(ProbeAnswer { u, force, contacts: solved.into_iter().zip(lambda).collect(), sensitivity })
     }
+}
+
+/// Where a sphere meets each node of `grid` at rest: the outward normal from `centre` and the
+/// node's depth inside the sphere (`radius - distance`; negative outside).
+pub fn sphere_geometry(grid: &Grid, centre: [f64; 3], radius: f64) -> Vec<([f64; 3], f64)> {
+    (0..grid.num_nodes())
+        .map(|p| {
+            let x = grid.position(p);
+            let d = [x[0] - centre[0], x[1] - centre[1], x[2] - centre[2]];
+            let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let n = if dist > 1e-12 { d.map(|c| c / dist) } else { [0.0, 0.0, 1.0] };
+            (n, radius - dist)
+        })
+        .collect()
+}
+
+/// The last solved contact set of [`contact_active_set`].
+#[derive(Debug)]
+pub struct ContactSolve {
+    /// Displacements with the contact forces applied, all dofs.
+    pub u: Vec<f64>,
+    /// The contact nodes.
+    pub solved: Vec<usize>,
+    /// Their contact forces along their normals, newtons.
+    pub lambda: Vec<f64>,
+    /// Their unit-normal-force responses (`K^-1 n_p`), all dofs.
+    pub columns: Vec<Vec<f64>>,
+    /// The Cholesky factor of their normal compliance (none without contact).
+    pub chol: Option<nalgebra::Cholesky<f64, nalgebra::Dyn>>,
+}
+
+/// Frictionless linearised node contact with an active set: starting from the unconstrained
+/// answer `base` of a system whose solve is `solve`, every node in contact is put on the sphere
+/// (`n_p . u_p = g_p`, `geometry` as [`sphere_geometry`]) by normal forces from the Schur
+/// complement of the contact nodes, until no contact pulls and no `free` node ends inside.
+pub fn contact_active_set(
+    solve: &mut dyn FnMut(&mut [f64]) -> Result<(), SparseError>,
+    base: &[f64],
+    geometry: &[([f64; 3], f64)],
+    free: &[bool],
+    radius: f64,
+) -> Result<ContactSolve, SparseError> {
+    let nn = geometry.len();
+    let normal_u = |u: &[f64], p: usize| (0..3).map(|c| geometry[p].0[c] * u[3 * p + c]).sum::<f64>();
+    let mut active: Vec<usize> = (0..nn).filter(|&p| free[p] && geometry[p].1 - normal_u(base, p) > 0.0).collect();
+    let mut u = base.to_vec();
+    // Unit normal-force responses, solved once per node.
+    let mut responses: std::collections::HashMap<usize, Vec<f64>> = std::collections::HashMap::new();
+    let mut out =
+        ContactSolve { u: Vec::new(), solved: Vec::new(), lambda: Vec::new(), columns: Vec::new(), chol: None };
+    for _ in 0..MAX_CONTACT_ITERATIONS {
+        u.copy_from_slice(base);
+        out.solved.clone_from(&active);
+        out.lambda.clear();
+        out.chol = None;
+        if active.is_empty() {
+            break;
+        }
+        for &p in &active {
+            if let std::collections::hash_map::Entry::Vacant(e) = responses.entry(p) {
+                let mut w = vec![0.0; base.len()];
+                w[3 * p..3 * p + 3].copy_from_slice(&geometry[p].0);
+                solve(&mut w)?;
+                e.insert(w);
+            }
+        }
+        let m = active.len();
+        let s = nalgebra::DMatrix::from_fn(m, m, |i, j| normal_u(&responses[&active[j]], active[i]));
+        let g = nalgebra::DVector::from_iterator(m, active.iter().map(|&p| geometry[p].1 - normal_u(base, p)));
+        let factor = s.cholesky().ok_or(SparseError::NotPositiveDefinite)?;
+        out.lambda.extend(factor.solve(&g).iter().copied());
+        out.chol = Some(factor);
+        for (&p, &l) in active.iter().zip(&out.lambda) {
+            for (ud, wd) in u.iter_mut().zip(&responses[&p]) {
+                *ud += l * wd;
+            }
+        }
+        // Keep pushing contacts; add free nodes that end inside the sphere.
+        let mut next: Vec<usize> = active.iter().zip(&out.lambda).filter(|(_, l)| **l > 0.0).map(|(p, _)| *p).collect();
+        next.extend(
+            (0..nn).filter(|&p| free[p] && !active.contains(&p) && normal_u(&u, p) < geometry[p].1 - 1e-12 * radius),
+        );
+        next.sort_unstable();
+        if next == active {
+            break;
+        }
+        active = next;
+    }
+    out.columns = out.solved.iter().map(|p| responses.remove(p).unwrap_or_default()).collect();
+    out.u = u;
+    Ok(out)
 }
 
 /// The adjoint of the probe force's magnitude with the contact set held: `d|F| = -w^T dK u`

@@ -153,6 +153,11 @@ impl ModelUnderTest {
     }
 }
 
+/// Frequencies as `14.58, 14.80, ...` (Hz, two decimals).
+pub fn frequency_list(hz: &[f64]) -> String {
+    hz.iter().map(|f| format!("{f:.2}")).collect::<Vec<_>>().join(", ")
+}
+
 /// Scores of one case.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CaseScore {
@@ -274,8 +279,8 @@ impl Report {
                 c.max_pct_h
             );
         }
-        let hz = |v: &[f64]| v.iter().map(|f| format!("{f:.2}")).collect::<Vec<_>>().join(", ");
-        s += &format!("modes, Hz: model {}\n           FEM   {}\n", hz(&self.modes_hz), hz(&self.fem_modes_hz));
+        let (model, fem) = (frequency_list(&self.modes_hz), frequency_list(&self.fem_modes_hz));
+        s += &format!("modes, Hz: model {model}\n           FEM   {fem}\n");
         s += &format!(
             "validation set: worst force error {:.1} %, median {:.1} %; worst frequency error {:.1} %\n",
             100.0 * self.worst_force_error,
