@@ -13,13 +13,14 @@ use argmin::core::{CostFunction, Executor, Gradient};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::LBFGS;
 use std::cell::RefCell;
-use tissue_sim::grid::Grid;
-use tissue_sim::material::Material;
-use tissue_sim::msm::Topology;
-use tissue_sim::touch::fit::touch_cost;
-use tissue_sim::touch::linear::{GroupedStiffness, group_of, group_values};
-use tissue_sim::touch::score::{Responder, case_score};
-use tissue_sim::touch::{Reference, Set};
+use tissue_sim::mechanics::grid::Grid;
+use tissue_sim::mechanics::material::Material;
+use tissue_sim::mechanics::msm::Topology;
+use tissue_sim::calibrate::fit::touch_cost;
+use tissue_sim::response::linear::{GroupedStiffness, group_of, group_values};
+use tissue_sim::validate::touch_score::{Responder, case_score};
+use tissue_sim::validate::touch::Set;
+use tissue_sim::validate::touch_score::Reference;
 
 fn on_surface(grid: &Grid, p: usize) -> bool {
     grid.ijk(p).iter().any(|&c| c == 0 || c == grid.n() - 1)
@@ -82,7 +83,7 @@ fn main() -> anyhow::Result<()> {
     let grid = Grid::paper();
     for m in [Material::object_a(), Material::object_b()] {
         let reference = Reference::new(&m, grid)?;
-        let shipped = tissue_sim::tissue::tissue_params(&m, Topology::Hex)?;
+        let shipped = tissue_sim::sim::shipped::tissue_params(&m, Topology::Hex)?;
         let t = group_values(&shipped);
         let s0: Vec<f64> = (0..14).map(|g| t[g % 7].ln()).collect();
         let responder = Responder::new(grid, split_lattice(grid), &[1.0; 14])?;
@@ -107,13 +108,13 @@ fn main() -> anyhow::Result<()> {
         println!("  groups (k1..b inside, then on the surface): {}", k.join(", "));
         // The shipped lattice's modes with equal node masses and with element-lumped ones.
         let mut r = Responder::new(grid, GroupedStiffness::lattice(grid, Topology::Hex), &t)?;
-        let fixed = tissue_sim::touch::linear::scene_fixed_dofs(&grid);
-        let node_mass = m.density * tissue_sim::grid::CUBE_SIDE_M.powi(3) / grid.num_nodes() as f64;
+        let fixed = tissue_sim::response::linear::scene_fixed_dofs(&grid);
+        let node_mass = m.density * tissue_sim::mechanics::grid::CUBE_SIDE_M.powi(3) / grid.num_nodes() as f64;
         let equal: Vec<f64> = fixed.iter().map(|&f| if f { 0.0 } else { node_mass }).collect();
-        let nodal = tissue_sim::msm::model::lumped_masses(&grid, m.density);
+        let nodal = tissue_sim::mechanics::msm::model::lumped_masses(&grid, m.density);
         let lumped: Vec<f64> = fixed.iter().enumerate().map(|(d, &f)| if f { 0.0 } else { nodal[d / 3] }).collect();
         for (name, mass) in [("equal node masses", &equal), ("element-lumped masses", &lumped)] {
-            let hz = tissue_sim::touch::modes::lowest_frequencies_hz(&mut r.solver, mass, 6)?;
+            let hz = tissue_sim::response::modes::lowest_frequencies_hz(&mut r.solver, mass, 6)?;
             let worst = hz.iter().zip(&reference.modes_hz).map(|(a, b)| (1.0 - a / b).abs()).fold(0.0, f64::max);
             println!("  shipped hex with {name}: worst frequency error {:.1} %", 100.0 * worst);
         }

@@ -6,16 +6,17 @@ use std::process::ExitCode;
 use anyhow::{Context as _, bail};
 use clap::{Args, Parser, Subcommand};
 
-use crate::accuracy::{case_errors, cost, format_table};
+use crate::validate::accuracy::{case_errors, cost, format_table};
 use crate::calibrate::{CaseSet, CostMode, GeneSpace, Method, Problem, Settings, calibrate};
-use crate::cases::{Bc, benchmark_cases};
-use crate::fem::FemModel;
-use crate::fem::dynamics::Formulation;
-use crate::grid::Grid;
-use crate::io::{CaseRecord, DisplacementFile, read_json, write_atomic, write_json_atomic};
-use crate::material::Material;
-use crate::msm::{MsmModel, MsmParams, Topology, statics};
-use crate::scene::ColourMode;
+use crate::mechanics::cases::{Bc, benchmark_cases};
+use crate::mechanics::fem::FemModel;
+use crate::mechanics::fem::dynamics::Formulation;
+use crate::mechanics::grid::Grid;
+use crate::io::{read_json, write_atomic, write_json_atomic};
+use crate::mechanics::displacement_file::{CaseRecord, DisplacementFile};
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::{MsmModel, MsmParams, Topology, statics};
+use crate::render::scene::ColourMode;
 use crate::sim::Integrator;
 use crate::study::choose::Metric;
 
@@ -287,7 +288,7 @@ pub enum Command {
         #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
         dt: f64,
         /// Damping ratio at the fundamental (mass-proportional).
-        #[arg(long, default_value_t = crate::dynamic::damping::DEFAULT_DAMPING_RATIO, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = crate::response::damping::DEFAULT_DAMPING_RATIO, allow_hyphen_values = true)]
         damping_ratio: f64,
         /// The scene of the trajectories and modes: the viewer's (face z = 0 clamped, a 1 N
         /// top-face shear, the probe tap) or the paper's clamped case along axis 1, 2 or 3 (10 N).
@@ -497,8 +498,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         None => crate::app::run(None, None),
         Some(Command::View { frames, screenshot }) => crate::app::run(frames, screenshot),
         Some(Command::Simulate { script, out }) => {
-            let s: crate::script::Script = read_json(&script)?;
-            let outcome = crate::script::run(&s).with_context(|| format!("in {}", script.display()))?;
+            let s: crate::study::script::Script = read_json(&script)?;
+            let outcome = crate::study::script::run(&s).with_context(|| format!("in {}", script.display()))?;
             outcome.check_finite()?;
             crate::io::write_json_compact(&out, &outcome)
         }
@@ -510,7 +511,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Some(Command::Calibrate(args)) => calibrate_command(args),
         Some(Command::Reproduce { out, seeds, no_shear }) => {
-            crate::reproduce::run(&out, &crate::reproduce::Options { seeds, shear: !no_shear })?;
+            crate::study::reproduce::run(&out, &crate::study::reproduce::Options { seeds, shear: !no_shear })?;
             say(&format!("wrote {}", out.join("report.md").display()))?;
             Ok(())
         }
@@ -557,7 +558,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             dynamics_command(&object, params, model.as_deref(), config, &scene, json)
         }
         Some(Command::Bench { json }) => {
-            let report = crate::bench::run()?;
+            let report = crate::study::bench::run()?;
             if json {
                 say(&serde_json::to_string_pretty(&report)?)?;
             } else {
@@ -723,7 +724,7 @@ fn render_command(
     out: PathBuf,
     (width, height): (u32, u32),
     case: Option<String>,
-    colour: crate::scene::ColourMode,
+    colour: crate::render::scene::ColourMode,
     model: Topology,
     magnify: f64,
 ) -> anyhow::Result<()> {
@@ -733,7 +734,7 @@ fn render_command(
     if !(16..=8192).contains(&width) || !(16..=8192).contains(&height) {
         bail!("--width and --height must be from 16 to 8192 pixels, got {width}x{height}");
     }
-    let scene = crate::scene::StaticScene::new(case.as_deref(), model, colour, magnify)?;
+    let scene = crate::render::scene::StaticScene::new(case.as_deref(), model, colour, magnify)?;
     let png = scene.render_png(width, height)?;
     write_atomic(&out, &png.bytes)?;
     say(&format!("wrote {} ({}x{}, adapter: {} / {:?})", out.display(), width, height, png.adapter, png.backend))?;
@@ -773,7 +774,7 @@ fn validate_command(
     model: Option<&str>,
     json: bool,
 ) -> anyhow::Result<()> {
-    use crate::touch::ModelUnderTest;
+    use crate::validate::touch_score::ModelUnderTest;
     let grid = grid.grid()?;
     let (material, model) = match (params, model) {
         (Some(path), _) => {
@@ -786,14 +787,14 @@ fn validate_command(
         }
         (None, None) => {
             let material = object.material(None)?;
-            let p = crate::tissue::default_params(&material)
+            let p = crate::sim::shipped::default_params(&material)
                 .context("the default tissue: give --params FILE.json or --model fem-linear")?;
             (material, ModelUnderTest::Lattice(p))
         }
     };
     check_solver_size("validate", Bc::Clamped, grid.n())?;
-    let reference = crate::touch::Reference::new(&material, grid)?;
-    let mut report = crate::touch::score::evaluate(&reference, &material, &model)
+    let reference = crate::validate::touch_score::Reference::new(&material, grid)?;
+    let mut report = crate::validate::touch_score::evaluate(&reference, &material, &model)
         .with_context(|| format!("scoring {} of material {}", model.name(), material.name))?;
     if let Some(label) = label {
         report.object = label;
@@ -819,7 +820,7 @@ fn dynamics_command(
     if !(dt.is_finite() && (1e-6..=0.05).contains(&dt)) {
         anyhow::bail!("--dt {} is out of range: a time step from 1e-6 to 0.05 s", crate::io::num(dt));
     }
-    let zeta = crate::dynamic::damping::check_ratio(zeta).map_err(|e| anyhow::anyhow!("--damping-ratio: {e}"))?;
+    let zeta = crate::response::damping::check_ratio(zeta).map_err(|e| anyhow::anyhow!("--damping-ratio: {e}"))?;
     let object_args = ObjectArgs { object: Some(object.to_ascii_uppercase()), material: None };
     let (material, choice, p) = match (params, model) {
         (Some(path), _) => {
@@ -830,13 +831,13 @@ fn dynamics_command(
             let material = object_args.material(None)?;
             let choice = match name {
                 Some(n) => ModelChoice::try_from(n.to_owned()).map_err(|e| anyhow::anyhow!("{e}"))?,
-                None => ModelChoice::Lattice(crate::tissue::DEFAULT_TOPOLOGY),
+                None => ModelChoice::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY),
             };
             (material, choice, None)
         }
     };
     if !choice.takes_damping_ratio() {
-        anyhow::bail!("dynamics: {}", crate::dynamic::modal::AXIS_HAS_NO_MODES);
+        anyhow::bail!("dynamics: {}", crate::response::modal::AXIS_HAS_NO_MODES);
     }
     // The viewer's policy picks the integrator and step (or checks the one asked for).
     let tissue = choice.build(&material, p, zeta)?;
@@ -853,12 +854,12 @@ fn dynamics_command(
     }
     let grid = Grid::paper();
     let scene = match scene.strip_prefix("clamped-").and_then(|a| a.parse::<usize>().ok()) {
-        Some(axis) => crate::dynamic::reference::paper_scene(&grid, &material.name, axis),
-        None => crate::dynamic::reference::view_scene(&grid),
+        Some(axis) => crate::validate::dynamic_reference::paper_scene(&grid, &material.name, axis),
+        None => crate::validate::dynamic_reference::view_scene(&grid),
     };
-    let refs = crate::dynamic::measure::References::with_scene(&material, zeta, scene)?;
-    let config = crate::dynamic::measure::Configuration { model: choice, params: p, integrator, dt };
-    let report = crate::dynamic::measure::measure(&refs, config)
+    let refs = crate::validate::dynamic_measure::References::with_scene(&material, zeta, scene)?;
+    let config = crate::validate::dynamic_measure::Configuration { model: choice, params: p, integrator, dt };
+    let report = crate::validate::dynamic_measure::measure(&refs, config)
         .with_context(|| format!("measuring {} with {} at dt = {} s", choice.name(), integrator.name(), dt))?;
     if json {
         say(&serde_json::to_string_pretty(&report)?)?;
@@ -868,7 +869,7 @@ fn dynamics_command(
     Ok(())
 }
 
-fn dynamics_text(r: &crate::dynamic::measure::DynamicReport, note: Option<&str>) -> String {
+fn dynamics_text(r: &crate::validate::dynamic_measure::DynamicReport, note: Option<&str>) -> String {
     let mut t = format!(
         "Dynamics: object {}, model {}, {} at dt = {} s, damping ratio {} at the fundamental (mass-proportional, \
          the viewer's scene: face z = 0 clamped); trajectories and modes: {}\n",
@@ -882,7 +883,7 @@ fn dynamics_text(r: &crate::dynamic::measure::DynamicReport, note: Option<&str>)
     if let Some(n) = note {
         t += &format!("note: {n}\n");
     }
-    let list = crate::touch::score::frequency_list;
+    let list = crate::validate::touch_score::frequency_list;
     t += &format!("lowest modes, Hz: model {}; FEM {}\n", list(&r.modes_hz), list(&r.fem_modes_hz));
     t += &format!(
         "fundamental period: measured {:.4} ms, own modal {:.4} ms (error {:.3} %), FEM {:.4} ms (error {:.3} %)\n",
@@ -908,7 +909,7 @@ fn dynamics_text(r: &crate::dynamic::measure::DynamicReport, note: Option<&str>)
     }
     for e in &r.transients {
         let what =
-            if e.transient == crate::dynamic::reference::Transient::ProbeTap { "probe force" } else { "loaded face" };
+            if e.transient == crate::validate::dynamic_reference::Transient::ProbeTap { "probe force" } else { "loaded face" };
         t += &format!(
             "trajectory error ({what}), {}: {:.3} % (FEM reference: Newmark, converged at {} s)\n",
             e.transient.name(),
@@ -936,7 +937,7 @@ fn progress_bar(len: u64, unit: &str) -> indicatif::ProgressBar {
 }
 
 /// The largest grid each solver accepts, nodes per axis, at the memory its factor needs (the
-/// sparse factor bound, [`crate::sparse::MAX_FACTOR_BYTES`]); checked before any work.
+/// sparse factor bound, [`crate::mechanics::sparse::MAX_FACTOR_BYTES`]); checked before any work.
 pub const MAX_NODES_FEM_PATCH: usize = 32;
 /// See [`MAX_NODES_FEM_PATCH`]: the static Newton solve of the shear and hex lattices.
 pub const MAX_NODES_MSM_NEWTON: usize = 40;
@@ -951,7 +952,7 @@ fn check_solver_size(solver: &str, bc: Bc, n: usize) -> anyhow::Result<()> {
     if n > max {
         bail!(
             "--nodes {n} is too large for {what}: at most {max} nodes per axis, whose factor fits the bound of {} MB",
-            crate::sparse::MAX_FACTOR_BYTES >> 20
+            crate::mechanics::sparse::MAX_FACTOR_BYTES >> 20
         );
     }
     Ok(())

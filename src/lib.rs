@@ -3,41 +3,31 @@
 //! mass-spring model"). See `ARCHITECTURE.md` for the layers, threads and rules.
 //!
 //! Data flows one way: material -> FEM reference -> cost -> calibration -> model parameters ->
-//! physics thread -> renderer.
+//! physics thread -> renderer. The folders are the layers, bottom to top; each uses only those
+//! below it:
 //!
-//! - Core: [`material`] (engineering constants, `S`, `C`), [`grid`] (nodes, elements, spring
-//!   families), [`cases`] (the benchmark's load cases and their answers), [`sparse`] (faer's
-//!   sparse Cholesky), [`fem`] (hex8 statics and dynamics), [`msm`] (the mass-spring lattices),
-//!   [`tissue`] (the shipped calibrated tissues), [`sim`] (the interactive simulation over any
-//!   tissue model), [`calibrate`] (GA+SA), [`accuracy`] (cost and error tables), [`io`] (JSON and
-//!   safe output files).
-//! - [`touch`]: the touch benchmark (held-out point, shear and probe touches, modes) behind
-//!   `validate`.
-//! - [`dynamic`]: damping as a ratio at the fundamental, the integrators' closed forms on one
-//!   mode, the converged FEM transients and the dynamic measurement behind `dynamics`.
-//! - Studies: [`study`] (speed against accuracy, stability, choice), [`reproduce`] (the paper's
-//!   tables and figures), [`bench`](mod@bench) (timings), [`script`] (`simulate`).
-//! - Presentation: [`render`] (wgpu renderer, offscreen), [`scene`] (what is drawn).
-//! - [`app`]: the interactive viewer. [`cli`]: the command line.
+//! 0. [`io`]: bounded reading, atomic writing, numbers in messages.
+//! 1. [`mechanics`]: grid, material, load cases, sparse solver, the hex8 FEM, the mass-spring
+//!    lattices.
+//! 2. [`response`]: the linear response shared above (stiffness groups, the scene solver and its
+//!    contact, modes, damping, integrators on one mode).
+//! 3. [`sim`]: the models the simulation steps (one model and one integrator vocabulary), the
+//!    step policy, tools, the blow-up guard, the shipped tissues.
+//! 4. [`validate`]: the touch benchmark, the dynamic reference and its measurement, static
+//!    accuracy.
+//! 5. [`calibrate`]: GA+SA, the polish, the load-free stiffness fit.
+//! 6. [`study`]: speed against accuracy, stability, choice, the paper's tables, timings, scripts.
+//! 7. [`render`]: the wgpu renderer, offscreen images, what a static scene draws.
+//! 8. [`app`]: the interactive viewer.
+//! 9. [`cli`]: the command line, which parses and prints.
 
-pub mod accuracy;
 pub mod app;
-pub mod bench;
 pub mod calibrate;
-pub mod cases;
 pub mod cli;
-pub mod dynamic;
-pub mod fem;
-pub mod grid;
 pub mod io;
-pub mod material;
-pub mod msm;
+pub mod mechanics;
 pub mod render;
-pub mod reproduce;
-pub mod scene;
-pub mod script;
+pub mod response;
 pub mod sim;
-pub mod sparse;
 pub mod study;
-pub mod tissue;
-pub mod touch;
+pub mod validate;

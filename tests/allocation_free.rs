@@ -3,9 +3,9 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use tissue_sim::cases::LoadCase;
-use tissue_sim::grid::Grid;
-use tissue_sim::msm::{Dynamics, MsmModel, MsmParams};
+use tissue_sim::mechanics::cases::LoadCase;
+use tissue_sim::mechanics::grid::Grid;
+use tissue_sim::mechanics::msm::{Dynamics, MsmModel, MsmParams};
 
 struct Counting;
 

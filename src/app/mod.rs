@@ -9,16 +9,15 @@
 //!   chart of [`study_panel`], and the FEM answer of a load case. The UI thread only draws and
 //!   forwards input.
 
-pub mod calibration;
+pub mod calibration_job;
+pub mod gestures;
 pub mod overlay;
 pub mod panel;
 pub mod physics;
 pub mod settings;
 pub mod state;
 pub mod stats;
-pub mod study_panel;
 pub mod surface;
-pub mod tools;
 pub mod viewer;
 pub mod worker;
 

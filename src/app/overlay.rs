@@ -6,11 +6,11 @@ use std::fmt::Write as _;
 
 use glam::Vec3;
 
-use crate::grid::Grid;
+use crate::mechanics::grid::Grid;
 use crate::render::gpu::LineVertex;
 use crate::render::mesh::SurfaceMesh;
 use crate::render::{fixed_outline, lattice_edges, normalise, push_edges};
-use crate::scene::ColourMode;
+use crate::render::scene::ColourMode;
 use crate::sim::Tool;
 
 /// What the overlays show.

@@ -8,8 +8,8 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use super::worker::{Context, State, Worker};
-use crate::cases::LoadCase;
-use crate::msm::MsmParams;
+use crate::mechanics::cases::LoadCase;
+use crate::mechanics::msm::MsmParams;
 use crate::sim::{Integrator, Simulation, Tissue, Tool};
 
 /// Wall-clock length of one physics tick.
@@ -91,7 +91,7 @@ pub struct Published {
     /// The explicit stability limit of the running model, s.
     pub dt_limit: f64,
     /// How the running model is damped.
-    pub damping: Option<crate::dynamic::damping::Damping>,
+    pub damping: Option<crate::response::damping::Damping>,
     /// The dynamic budget of the automatic choice.
     pub budget: Option<crate::sim::DynamicBudget>,
     /// The running model's parameters.

@@ -1,13 +1,13 @@
 //! What the viewer shows and the user sets: the pure view settings the panel edits directly
 //! ([`ViewSettings`]) and the model-side state it displays ([`Shown`]), changed only by
-//! [`super::state::ViewerState::handle`].
+//! `ViewerState::handle`.
 
 use crate::calibrate::{CaseSet, GenerationStats, Method};
-use crate::cases::LoadCase;
-use crate::fem::dynamics::Formulation;
-use crate::material::Material;
-use crate::msm::{MsmParams, Topology};
-use crate::scene::ColourMode;
+use crate::mechanics::cases::LoadCase;
+use crate::mechanics::fem::dynamics::Formulation;
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::{MsmParams, Topology};
+use crate::render::scene::ColourMode;
 use crate::sim::Integrator;
 use crate::sim::ModelChoice;
 
@@ -79,7 +79,7 @@ impl Default for ViewSettings {
     }
 }
 
-/// The model-side state the panel shows (changed only through [`super::state::ViewerState::handle`]).
+/// The model-side state the panel shows (changed only through `ViewerState::handle`).
 #[derive(Debug, Clone)]
 pub struct Shown {
     /// The material.
@@ -111,13 +111,13 @@ pub struct Shown {
     /// The FEM runs instead of the lattice of `params` (kept for switching back).
     pub fem: Option<Formulation>,
     /// The running model's touch-benchmark scores (validation set), once computed, or why not.
-    pub validation: Option<Result<crate::tissue::RecordedScores, String>>,
+    pub validation: Option<Result<crate::sim::shipped::RecordedScores, String>>,
     /// The tool held now (drawn over the tissue).
     pub tool: crate::sim::Tool,
     /// The probe's last position (centre, radius; metres), kept after it is let go.
     pub last_probe: Option<([f64; 3], f64)>,
     /// The FEM's and the model's probe force at the last probe position, solved on request.
-    pub fem_probe: Option<super::state::ProbeComparison>,
+    pub fem_probe: Option<ProbeComparison>,
 }
 
 impl Shown {
@@ -133,4 +133,16 @@ impl Shown {
             None => ModelChoice::Lattice(self.topology()),
         }
     }
+}
+
+/// The probe force of the FEM and of the running model at one sphere position (static, small
+/// displacements, node contact).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProbeComparison {
+    /// The sphere's centre, metres.
+    pub centre: [f64; 3],
+    /// The FEM's force, newtons.
+    pub fem_n: f64,
+    /// The model's force, newtons, or why it has none.
+    pub model_n: Result<f64, String>,
 }

@@ -10,18 +10,18 @@
 
 use std::sync::Arc;
 
-use super::calibration::{self, Progress};
+use super::calibration_job::{self, Progress};
 use super::physics::{Command, Replacement};
-pub use super::settings::{Shown, ToolKind, ViewSettings};
+pub use super::settings::{ProbeComparison, Shown, ToolKind, ViewSettings};
 use super::worker::{Slot, State};
 use crate::calibrate::Settings;
-use crate::cases::LoadCase;
-use crate::fem::FemModel;
-use crate::grid::Grid;
-use crate::material::Material;
-use crate::msm::{MsmParams, Topology};
+use crate::mechanics::cases::LoadCase;
+use crate::mechanics::fem::FemModel;
+use crate::mechanics::grid::Grid;
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::{MsmParams, Topology};
 use crate::sim::{Integrator, ModelChoice, Tool};
-use crate::tissue::tissue_params;
+use crate::sim::shipped::tissue_params;
 
 /// What the user asked for.
 #[derive(Debug, Clone, PartialEq)]
@@ -31,7 +31,7 @@ pub enum Request {
     /// Another lattice: its shipped calibration (or the material's scale).
     SelectTopology(Topology),
     /// The FEM in place of the lattice.
-    SelectFem(crate::fem::dynamics::Formulation),
+    SelectFem(crate::mechanics::fem::dynamics::Formulation),
     /// Solve the FEM's force for the probe's current position (in the background).
     FemProbeForce,
     /// Edited parameters.
@@ -60,18 +60,6 @@ pub enum Request {
     ForceSample([f64; 2]),
 }
 
-/// The probe force of the FEM and of the running model at one sphere position (static, small
-/// displacements, node contact).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ProbeComparison {
-    /// The sphere's centre, metres.
-    pub centre: [f64; 3],
-    /// The FEM's force, newtons.
-    pub fem_n: f64,
-    /// The model's force, newtons, or why it has none.
-    pub model_n: Result<f64, String>,
-}
-
 /// The viewer's state.
 pub struct ViewerState {
     /// What the panel edits directly.
@@ -81,7 +69,7 @@ pub struct ViewerState {
     grid: Grid,
     fem: Slot<Result<Vec<[f64; 3]>, String>>,
     calibration: Slot<Progress>,
-    validation: Slot<Result<crate::tissue::RecordedScores, String>>,
+    validation: Slot<Result<crate::sim::shipped::RecordedScores, String>>,
     /// The model changed while a validation ran: score it again when that one ends.
     validation_stale: bool,
     fem_probe: Slot<Result<ProbeComparison, String>>,
@@ -102,12 +90,12 @@ fn recipe(model: ModelChoice, material: Material, params: MsmParams, zeta: f64) 
 }
 
 impl ViewerState {
-    /// Object A with its default tissue ([`crate::tissue::DEFAULT_TOPOLOGY`]), and the simulation to start with;
+    /// Object A with its default tissue ([`crate::sim::shipped::DEFAULT_TOPOLOGY`]), and the simulation to start with;
     /// `wake` repaints the UI from background threads.
     pub fn new(wake: impl Fn() + Send + Sync + 'static) -> anyhow::Result<(Self, Replacement)> {
         let grid = Grid::paper();
         let material = Material::object_a();
-        let params = crate::tissue::default_params(&material)?;
+        let params = crate::sim::shipped::default_params(&material)?;
         let dt = 1e-4;
         let state = Self {
             settings: ViewSettings::default(),
@@ -116,7 +104,7 @@ impl ViewerState {
                 params,
                 integrator: None,
                 dt,
-                damping_ratio: crate::dynamic::damping::DEFAULT_DAMPING_RATIO,
+                damping_ratio: crate::response::damping::DEFAULT_DAMPING_RATIO,
                 case_active: None,
                 fem_answer: None,
                 history: Vec::new(),
@@ -288,9 +276,9 @@ impl ViewerState {
             "touch validation",
             move || wake(),
             move |ctx| {
-                let r = crate::touch::Reference::new(&material, grid)
-                    .and_then(|reference| crate::touch::score::evaluate(&reference, &material, &model))
-                    .map(|r| crate::tissue::RecordedScores {
+                let r = crate::validate::touch_score::Reference::new(&material, grid)
+                    .and_then(|reference| crate::validate::touch_score::evaluate(&reference, &material, &model))
+                    .map(|r| crate::sim::shipped::RecordedScores {
                         worst_force_error: r.worst_force_error,
                         median_force_error: r.median_force_error,
                         worst_frequency_error: r.worst_frequency_error,
@@ -318,11 +306,11 @@ impl ViewerState {
             "FEM probe force",
             move || wake(),
             move |ctx| {
-                let force = |m: crate::touch::ModelUnderTest| -> anyhow::Result<f64> {
+                let force = |m: crate::validate::touch_score::ModelUnderTest| -> anyhow::Result<f64> {
                     let (mut r, _) = m.responder(&material, grid)?;
                     Ok(r.solver.probe(&grid, centre, radius)?.force_n())
                 };
-                let fem = force(crate::touch::ModelUnderTest::Fem(crate::fem::dynamics::Formulation::Linear));
+                let fem = force(crate::validate::touch_score::ModelUnderTest::Fem(crate::mechanics::fem::dynamics::Formulation::Linear));
                 let r = fem.map(|f| ProbeComparison {
                     centre,
                     fem_n: f,
@@ -337,10 +325,10 @@ impl ViewerState {
     }
 
     /// The running model as the touch benchmark scores it.
-    fn model_under_test(&self) -> crate::touch::ModelUnderTest {
+    fn model_under_test(&self) -> crate::validate::touch_score::ModelUnderTest {
         match self.shown.model() {
-            ModelChoice::Fem(f) => crate::touch::ModelUnderTest::Fem(f),
-            ModelChoice::Lattice(_) => crate::touch::ModelUnderTest::Lattice(self.shown.params),
+            ModelChoice::Fem(f) => crate::validate::touch_score::ModelUnderTest::Fem(f),
+            ModelChoice::Lattice(_) => crate::validate::touch_score::ModelUnderTest::Lattice(self.shown.params),
         }
     }
 
@@ -385,8 +373,8 @@ impl ViewerState {
         let wake = Arc::clone(&self.wake);
         let material = self.shown.material.clone();
         let job =
-            calibration::Job { material, topology: self.shown.topology(), cases: self.settings.calib_cases, settings };
-        match calibration::start(&mut self.calibration, job, move || wake()) {
+            calibration_job::Job { material, topology: self.shown.topology(), cases: self.settings.calib_cases, settings };
+        match calibration_job::start(&mut self.calibration, job, move || wake()) {
             Ok(()) => {
                 self.shown.history.clear();
                 self.shown.result = None;
@@ -478,7 +466,7 @@ mod tests {
     fn applying_a_calibration_changes_topology_and_keeps_the_integrator_guard() {
         let (mut state, physics) = started();
         let mut send = |c| physics.send(c).expect("physics runs");
-        assert_eq!(state.shown.topology(), crate::tissue::DEFAULT_TOPOLOGY);
+        assert_eq!(state.shown.topology(), crate::sim::shipped::DEFAULT_TOPOLOGY);
         // A result of another lattice (the paper's axis springs), applied as the panel would.
         let axis = tissue_params(&state.shown.material, Topology::Axis).expect("shipped");
         state.shown.result = Some(axis);
@@ -533,7 +521,7 @@ mod tests {
     fn the_fem_runs_in_place_of_the_lattice_and_back() {
         let (mut state, physics) = started();
         let mut send = |c| physics.send(c).expect("physics runs");
-        state.handle(Request::SelectFem(crate::fem::dynamics::Formulation::Corotational), &mut send);
+        state.handle(Request::SelectFem(crate::mechanics::fem::dynamics::Formulation::Corotational), &mut send);
         assert_eq!(state.shown.model().name(), "fem-corotational");
         let before = wait_until(&physics, |p| p.params.is_some()).revision;
         let p = wait_until(&physics, |p| p.params.is_none() && p.revision > before);

@@ -15,13 +15,13 @@ use super::panel::{self, PanelContext};
 use super::physics::{Command, PhysicsThread, Published};
 use super::state::{Request, ViewerState};
 use super::stats::Stats;
-use super::study_panel::StudyPanel;
+use super::panel::study::StudyPanel;
 use super::surface::{CubeFrame, EguiFrame, Surface};
-use super::tools::{Gesture, Scene, view_input};
+use super::gestures::{Gesture, Scene, view_input};
 use crate::render::camera::OrbitCamera;
 use crate::render::gpu::SurfaceStyle;
 use crate::render::mesh::SurfaceMesh;
-use crate::scene::ColourMode;
+use crate::render::scene::ColourMode;
 
 /// A wake-up from a background thread (egui asked for a repaint).
 #[derive(Debug, Clone, Copy)]

@@ -10,14 +10,14 @@
 //! warm-started from the previous force of the same axis, with the sparse pattern and symbolic
 //! factorisation kept in a per-thread [`Workspace`].
 
-use crate::cases::{Bc, CaseSolution, LoadCase, benchmark_cases};
-use crate::fem::FemModel;
-use crate::grid::Grid;
-use crate::material::Material;
-use crate::msm::forces::TangentAssembler;
-use crate::msm::statics::{NewtonOptions, StaticError, case_dofs, closed_form_axis, solve_newton_with};
-use crate::msm::{MsmModel, MsmParams, ParamError, Topology};
-use crate::sparse::SparseError;
+use crate::mechanics::cases::{Bc, CaseSolution, LoadCase, benchmark_cases};
+use crate::mechanics::fem::FemModel;
+use crate::mechanics::grid::Grid;
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::forces::TangentAssembler;
+use crate::mechanics::msm::statics::{NewtonOptions, StaticError, case_dofs, closed_form_axis, solve_newton_with};
+use crate::mechanics::msm::{MsmModel, MsmParams, ParamError, Topology};
+use crate::mechanics::sparse::SparseError;
 
 /// Errors of a cost evaluation or of setting up a calibration problem.
 #[derive(Debug, thiserror::Error)]
@@ -58,7 +58,7 @@ pub struct Problem {
     /// The training cases the static objective uses.
     pub case_set: super::CaseSet,
     /// The touch benchmark's FEM answers, when the objective uses them.
-    pub touch: Option<std::sync::Arc<crate::touch::Reference>>,
+    pub touch: Option<std::sync::Arc<crate::validate::touch_score::Reference>>,
     /// The paper cost of a zero displacement (the sum of the FEM's nodal displacement norms),
     /// metres: the scale that makes the paper's cost relative in the combined objective.
     paper_scale: f64,
@@ -99,7 +99,7 @@ fn tangent_for<'w>(
 pub struct Workspace {
     tangents: [Option<TangentAssembler>; 3],
     transient: [Option<TangentAssembler>; 3],
-    touch: Option<crate::touch::score::Responder>,
+    touch: Option<crate::validate::touch_score::Responder>,
 }
 
 impl Problem {
@@ -152,7 +152,7 @@ impl Problem {
             super::CostMode::Static => self.objective(params, ws),
             super::CostMode::Transient => {
                 let solutions = self.transient_solutions(params, ws)?;
-                Ok(crate::accuracy::cost(&solutions, &self.fem))
+                Ok(crate::validate::accuracy::cost(&solutions, &self.fem))
             }
         }
     }
@@ -179,7 +179,7 @@ impl Problem {
                     "the axis-spring lattice has no shear stiffness at rest, so the touch cases cannot train it".into(),
                 ));
             }
-            let reference = crate::touch::Reference::new(&self.material, self.grid)
+            let reference = crate::validate::touch_score::Reference::new(&self.material, self.grid)
                 .map_err(|e| CostError::Touch(format!("{e:#}")))?;
             self.touch = Some(std::sync::Arc::new(reference));
         }
@@ -188,7 +188,7 @@ impl Problem {
     }
 
     /// The static objective over the training cases of [`Problem::case_set`]: the paper's cost
-    /// (metres), the touch cost (dimensionless, [`crate::touch::fit`]), or for both the touch
+    /// (metres), the touch cost (dimensionless, [`crate::calibrate::fit`]), or for both the touch
     /// cost plus the paper's cost relative to the FEM's summed nodal displacements.
     pub fn objective(&self, params: &MsmParams, ws: &mut Workspace) -> Result<f64, CostError> {
         match self.case_set {
@@ -205,11 +205,11 @@ impl Problem {
             return Ok((0..self.cases.len()).map(|c| self.axis_cost(c, k[self.cases[c].axis - 1])).sum());
         }
         let solutions = self.static_solutions(params, ws)?;
-        Ok(crate::accuracy::cost(&solutions, &self.fem))
+        Ok(crate::validate::accuracy::cost(&solutions, &self.fem))
     }
 
     /// The paper's cost of a shear or hex lattice and its exact gradient by each stiffness group
-    /// ([`crate::touch::linear::GROUP_NAMES`]), by the adjoint of the nonlinear equilibrium: with
+    /// ([`crate::response::linear::GROUP_NAMES`]), by the adjoint of the nonlinear equilibrium: with
     /// `K_t` the tangent at the equilibrium and `g = dC/du`, `dC/dtheta_g = (K_t^-1 g) . phi_g`,
     /// `phi_g` the spring forces of group `g` at unit stiffness. One extra solve per case.
     pub fn paper_gradient(&self, params: &MsmParams, ws: &mut Workspace) -> Result<(f64, [f64; 7]), CostError> {
@@ -245,7 +245,7 @@ impl Problem {
             tangent.dofs.expand_add(&rhs, &mut mu);
             tangent.system.invalidate();
             for s in unit.springs() {
-                let group = crate::touch::linear::group_of(unit.families[s.family].family);
+                let group = crate::response::linear::group_of(unit.families[s.family].family);
                 let d: [f64; 3] = std::array::from_fn(|c| x[c][s.b] - x[c][s.a]);
                 let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
                 let coef = s.k * (l - s.rest) / l;
@@ -262,10 +262,10 @@ impl Problem {
             let reference = self.touch.as_deref().ok_or_else(|| CostError::Touch("no touch reference".into()))?;
             let responder = match &mut ws.touch {
                 Some(r) => r,
-                empty => empty.insert(crate::touch::fit::lattice_responder(reference, self.topology)?),
+                empty => empty.insert(crate::calibrate::fit::lattice_responder(reference, self.topology)?),
             };
-            let theta = crate::touch::linear::group_values(params);
-            let (cost, g) = crate::touch::fit::touch_cost(reference, crate::touch::Set::Training, responder, &theta)?;
+            let theta = crate::response::linear::group_values(params);
+            let (cost, g) = crate::calibrate::fit::touch_cost(reference, crate::validate::touch::Set::Training, responder, &theta)?;
             let mut grad = [0.0; 7];
             grad.copy_from_slice(&g);
             Ok((cost, grad))
@@ -374,14 +374,14 @@ mod tests {
         let mut ws = Workspace::default();
         let (c, g) = problem.paper_gradient(&params, &mut ws).unwrap();
         assert!((c - problem.cost(&params, &mut ws).unwrap()).abs() <= 1e-12 * c);
-        let theta = crate::touch::linear::group_values(&params);
+        let theta = crate::response::linear::group_values(&params);
         let scale = g.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         for i in 0..7 {
             let h = 1e-5 * theta[i];
             let at = |t: f64| {
                 let mut th = theta;
                 th[i] = t;
-                let p = crate::touch::linear::with_group_values(&params, &th);
+                let p = crate::response::linear::with_group_values(&params, &th);
                 problem.cost(&p, &mut Workspace::default()).unwrap()
             };
             let fd = (at(theta[i] + h) - at(theta[i] - h)) / (2.0 * h);

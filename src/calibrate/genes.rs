@@ -15,9 +15,9 @@
 //! damping of the slowest axial mode of a spring chain at `k*` (clamped at one end, `n - 1` moving
 //! masses: `omega_1 = 2 sqrt(k*/m) sin(pi / (2 (2n - 1)))`), taken over the three axes.
 
-use crate::grid::{CUBE_SIDE_M, Grid};
-use crate::material::Material;
-use crate::msm::{MsmParams, Topology};
+use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::{MsmParams, Topology};
 
 /// Names and bounds of the genes of one calibration.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -103,7 +103,7 @@ impl GeneSpace {
         if name.starts_with('k') && lo <= 0.0 {
             return Err(format!("the lower bound of {name} must be positive (an axis spring needs stiffness)"));
         }
-        let (min, max) = crate::msm::model::STIFFNESS_RANGE;
+        let (min, max) = crate::mechanics::msm::model::STIFFNESS_RANGE;
         if name == "d" {
             if hi > max {
                 return Err(format!(

@@ -10,10 +10,11 @@
 //! In static mode the result says so (`d_identified: false`) and sets `d` by a stated criterion:
 //! critical damping `d = 2 m omega_min` of the slowest mode of the calibrated model, clamped as
 //! in the benchmark (the smallest over the three clamped faces, in the mirror-symmetric subspace
-//! the benchmark's loads excite; see [`damping`]).
+//! the benchmark's loads excite; see [`critical`]).
 
 pub mod cost;
-pub mod damping;
+pub mod critical;
+pub mod fit;
 pub mod genes;
 pub mod polish;
 pub mod search;
@@ -24,15 +25,16 @@ use std::time::Instant;
 
 pub use cost::{CostError, Problem, Workspace};
 pub use genes::GeneSpace;
+pub use crate::sim::shipped::CaseSet;
 
-use crate::msm::{MsmParams, Topology};
+use crate::mechanics::msm::{MsmParams, Topology};
 
 /// The search method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// The load-free baseline: the non-negative least-squares fit of the lattice's stiffness
-    /// matrix to the FEM's ([`crate::touch::fit::stiffness_fit`]); no search, no load case.
+    /// matrix to the FEM's ([`crate::calibrate::fit::stiffness_fit`]); no search, no load case.
     #[serde(rename = "stiffness-fit")]
     StiffnessFit,
     /// GA with Metropolis screening of crossover (XSA) and mutation (MSA): the paper's method.
@@ -61,29 +63,6 @@ impl Method {
             Method::Hybrid => "hybrid",
             Method::Ga => "ga",
             Method::Sa => "sa",
-        }
-    }
-}
-
-/// The training cases of the static cost.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CaseSet {
-    /// The paper's nine clamped face loads (eq. 1), the default.
-    Paper,
-    /// The touch benchmark's training cases ([`crate::touch`]).
-    Touch,
-    /// Both: the touch cost plus the paper's cost relative to the FEM's displacements.
-    Both,
-}
-
-impl CaseSet {
-    /// The lower-case name used on the command line and in files.
-    pub fn name(self) -> &'static str {
-        match self {
-            CaseSet::Paper => "paper",
-            CaseSet::Touch => "touch",
-            CaseSet::Both => "both",
         }
     }
 }
@@ -274,13 +253,13 @@ fn search_and_polish(
 
 /// The stiffness genes of `params` that lie outside `space`'s box (`d` is not a stiffness).
 fn left_box(space: &GeneSpace, params: &MsmParams) -> Vec<String> {
-    let theta = crate::touch::linear::group_values(params);
+    let theta = crate::response::linear::group_values(params);
     space
         .names
         .iter()
         .zip(space.lo.iter().zip(&space.hi))
         .filter_map(|(name, (&lo, &hi))| {
-            let g = crate::touch::linear::GROUP_NAMES.iter().position(|n| n == name)?;
+            let g = crate::response::linear::GROUP_NAMES.iter().position(|n| n == name)?;
             (theta[g] < lo || theta[g] > hi).then(|| name.clone())
         })
         .collect()
@@ -310,9 +289,9 @@ pub fn calibrate(
     let start = Instant::now();
     let (mut params, outcome, polish) = match settings.method {
         Method::StiffnessFit => {
-            let fem = crate::fem::FemModel::new(problem.grid, &problem.material);
+            let fem = crate::mechanics::fem::FemModel::new(problem.grid, &problem.material);
             let ti = problem.material.is_transversely_isotropic();
-            let (params, _) = crate::touch::fit::stiffness_fit(&fem, problem.topology, ti);
+            let (params, _) = crate::calibrate::fit::stiffness_fit(&fem, problem.topology, ti);
             let cost = problem.objective(&params, &mut Workspace::default())?;
             let outcome = search::SearchOutcome {
                 best: Vec::new(),
@@ -325,7 +304,7 @@ pub fn calibrate(
         }
         Method::Hybrid | Method::Ga | Method::Sa => search_and_polish(problem, space, settings, cancel, on_generation)?,
     };
-    let (d_crit, omega) = damping::critical_damping(&problem.model(&params).map_err(CostError::from)?)?;
+    let (d_crit, omega) = critical::critical_damping(&problem.model(&params).map_err(CostError::from)?)?;
     let d_identified = settings.cost == CostMode::Transient;
     let d_note = if d_identified {
         format!(

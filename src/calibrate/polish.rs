@@ -10,9 +10,9 @@ use argmin::core::{CostFunction, Executor, Gradient};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::LBFGS;
 
-use crate::msm::MsmParams;
-use crate::touch::fit::Groups;
-use crate::touch::linear::{group_values, with_group_values};
+use crate::mechanics::msm::MsmParams;
+use crate::calibrate::fit::Groups;
+use crate::response::linear::{group_values, with_group_values};
 
 /// L-BFGS iterations at most.
 const MAX_ITERATIONS: u64 = 200;
@@ -40,7 +40,7 @@ struct LogProblem<'a, 'b> {
 }
 
 fn clamp_log(s: f64) -> f64 {
-    let (lo, hi) = crate::msm::model::STIFFNESS_RANGE;
+    let (lo, hi) = crate::mechanics::msm::model::STIFFNESS_RANGE;
     s.clamp(lo.ln(), hi.ln())
 }
 
@@ -117,7 +117,7 @@ pub fn polish(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::msm::Topology;
+    use crate::mechanics::msm::Topology;
 
     #[test]
     fn polish_finds_the_minimum_of_a_smooth_objective() {

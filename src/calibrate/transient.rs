@@ -14,10 +14,10 @@
 //! moves as one, the springs stay aligned with the load, and each case is exactly one chain of
 //! `n - 1` masses, integrated with the same scheme (where it is exact: the chain is linear).
 
-use crate::cases::LoadCase;
-use crate::msm::forces::{ForceScratch, TangentAssembler, add_spring_forces};
-use crate::msm::{MsmModel, Topology};
-use crate::sparse::SparseError;
+use crate::mechanics::cases::LoadCase;
+use crate::mechanics::msm::forces::{ForceScratch, TangentAssembler, add_spring_forces};
+use crate::mechanics::msm::{MsmModel, Topology};
+use crate::mechanics::sparse::SparseError;
 
 /// Simulated time after which the state is compared, seconds.
 pub const TRANSIENT_TIME_S: f64 = 0.02;
@@ -134,11 +134,11 @@ pub fn chain_transient(k: f64, m: f64, d: f64, moving: usize, f_tip: f64, h: f64
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cases::LoadCase;
-    use crate::grid::Grid;
-    use crate::msm::forces::TangentAssembler;
-    use crate::msm::reduction::DofMap;
-    use crate::msm::{MsmModel, MsmParams};
+    use crate::mechanics::cases::LoadCase;
+    use crate::mechanics::grid::Grid;
+    use crate::mechanics::msm::forces::TangentAssembler;
+    use crate::mechanics::msm::reduction::DofMap;
+    use crate::mechanics::msm::{MsmModel, MsmParams};
 
     #[test]
     fn chain_settles_to_the_static_stretch_with_damping() {

@@ -3,7 +3,7 @@
 //! Each of the six faces has its own `n x n` vertices (so the cube's edges stay sharp) and its
 //! normals are recomputed from the deformed positions (area-weighted triangle normals).
 
-use crate::grid::Grid;
+use crate::mechanics::grid::Grid;
 
 /// A surface vertex as the GPU reads it.
 #[repr(C)]

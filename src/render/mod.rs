@@ -5,13 +5,14 @@ pub mod camera;
 pub mod gpu;
 pub mod mesh;
 pub mod offscreen;
+pub mod scene;
 
-use crate::grid::Grid;
+use crate::mechanics::grid::Grid;
 use gpu::LineVertex;
 
 /// The grid's edges (pairs of lattice neighbours), for line overlays; build once per grid.
 pub fn lattice_edges(grid: &Grid) -> Vec<(usize, usize)> {
-    crate::grid::axis_families().iter().flat_map(|f| grid.springs(*f)).collect()
+    crate::mechanics::grid::axis_families().iter().flat_map(|f| grid.springs(*f)).collect()
 }
 
 /// Appends the `edges` for which `keep(a, b)` holds as line segments, while `out` has capacity.

@@ -5,12 +5,12 @@
 //! node-wise copy is the state between steps, and a step copies it in and out (no allocation).
 
 use super::{Integrator, Tissue};
-use crate::cases::LoadCase;
-use crate::dynamic::damping::Damping;
-use crate::fem::FemModel;
-use crate::fem::dynamics::{FemDynamics, Formulation};
-use crate::grid::Grid;
-use crate::msm::MsmParams;
+use crate::mechanics::cases::LoadCase;
+use crate::response::damping::Damping;
+use crate::mechanics::fem::FemModel;
+use crate::mechanics::fem::dynamics::{FemDynamics, Formulation};
+use crate::mechanics::grid::Grid;
+use crate::mechanics::msm::MsmParams;
 
 /// A FEM cube as a [`Tissue`].
 #[derive(Debug)]
@@ -30,7 +30,7 @@ pub struct FemTissue {
 
 impl FemTissue {
     /// `material` on `grid` at rest, undamped until [`Tissue::set_damping_ratio`].
-    pub fn new(grid: Grid, material: &crate::material::Material, formulation: Formulation) -> Self {
+    pub fn new(grid: Grid, material: &crate::mechanics::material::Material, formulation: Formulation) -> Self {
         let model = FemModel::new(grid, material);
         let dt_limit = fem_dt_limit(&model, material.density, 0.0);
         let dynamics = FemDynamics::new(model, material.density, formulation, 0.0);
@@ -84,7 +84,7 @@ fn fem_dt_limit(model: &FemModel, density: f64, alpha: f64) -> f64 {
             row[c] += v.abs();
         }
     }
-    let mass = crate::msm::model::lumped_masses(&model.grid, density);
+    let mass = crate::mechanics::msm::model::lumped_masses(&model.grid, density);
     let lambda = row.iter().enumerate().map(|(d, r)| r / mass[d / 3]).fold(0.0, f64::max);
     let damping_limit = if alpha > 0.0 { 2.0 / alpha } else { f64::INFINITY };
     (2.0 / lambda.sqrt()).min(damping_limit)
@@ -168,10 +168,10 @@ impl Tissue for FemTissue {
         Err("a FEM model has no spring parameters".into())
     }
     fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String> {
-        let zeta = crate::dynamic::damping::check_ratio(zeta)?;
+        let zeta = crate::response::damping::check_ratio(zeta)?;
         let omega_1 = match self.damping.omega_1() {
             Some(w) => w,
-            None => crate::dynamic::modal::scene_fundamental(&crate::dynamic::modal::ModalModel::fem(
+            None => crate::response::modal::scene_fundamental(&crate::response::modal::ModalModel::fem(
                 &self.dynamics.model,
                 self.density,
             ))?,

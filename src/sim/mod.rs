@@ -5,15 +5,16 @@
 //! drive this.
 
 pub mod fem_tissue;
+pub mod shipped;
 pub mod tissue;
 
 pub use fem_tissue::FemTissue;
 pub use tissue::{MsmTissue, Tissue, explicit_dt_limit};
 
-use crate::dynamic::damping::Damping;
-use crate::fem::dynamics::Formulation;
-use crate::material::Material;
-use crate::msm::Topology;
+use crate::response::damping::Damping;
+use crate::mechanics::fem::dynamics::Formulation;
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::Topology;
 
 /// Which model runs: a spring lattice with the shipped tissue of its topology, or the hex8 FEM.
 /// Written `axis`, `shear`, `hex`, `fem-linear` or `fem-corotational` (scripts, the command line).
@@ -46,15 +47,15 @@ impl ModelChoice {
 
     /// The running tissue of `material` at rest on the paper's grid: a lattice with `params`
     /// (the shipped tissue where `None`), or the FEM; damped by the ratio `zeta` at its
-    /// fundamental ([`crate::dynamic::damping`]), except the paper's axis lattice, which keeps
+    /// fundamental ([`crate::response::damping`]), except the paper's axis lattice, which keeps
     /// its nodal `d`.
     pub fn build(self, material: &Material, params: Option<MsmParams>, zeta: f64) -> anyhow::Result<Box<dyn Tissue>> {
-        let grid = crate::grid::Grid::paper();
+        let grid = crate::mechanics::grid::Grid::paper();
         let mut tissue: Box<dyn Tissue> = match self {
             ModelChoice::Lattice(t) => {
                 let p = match params {
                     Some(p) => p,
-                    None => crate::tissue::tissue_params(material, t)?,
+                    None => crate::sim::shipped::tissue_params(material, t)?,
                 };
                 Box::new(MsmTissue::new(MsmModel::new(grid, p, material.density)?, material.density))
             }
@@ -88,8 +89,8 @@ impl TryFrom<String> for ModelChoice {
     }
 }
 
-use crate::cases::LoadCase;
-use crate::msm::{MsmModel, MsmParams};
+use crate::mechanics::cases::LoadCase;
+use crate::mechanics::msm::{MsmModel, MsmParams};
 
 /// Time integrator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -104,11 +105,11 @@ pub enum Integrator {
 }
 
 impl Integrator {
-    /// What the integrator is on a linear model's mode ([`crate::dynamic::single_mode`]).
-    pub fn scheme(self) -> crate::dynamic::single_mode::Scheme {
+    /// What the integrator is on a linear model's mode ([`crate::response::single_mode`]).
+    pub fn scheme(self) -> crate::response::single_mode::Scheme {
         match self {
-            Integrator::Symplectic => crate::dynamic::single_mode::Scheme::Symplectic,
-            Integrator::Implicit | Integrator::Prefactored => crate::dynamic::single_mode::Scheme::BackwardEuler,
+            Integrator::Symplectic => crate::response::single_mode::Scheme::Symplectic,
+            Integrator::Implicit | Integrator::Prefactored => crate::response::single_mode::Scheme::BackwardEuler,
         }
     }
 
@@ -166,7 +167,7 @@ pub fn choose_integrator(requested: Option<Integrator>, dt: f64, limit: f64) -> 
 /// Budgets on the dynamic error of the fundamental that the automatic choice of
 /// [`choose_step`] meets: the period's relative error and the damping ratio's error (in units of
 /// critical), both against the model's own damped fundamental, predicted by the integrator's
-/// closed form ([`crate::dynamic::single_mode`]).
+/// closed form ([`crate::response::single_mode`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DynamicBudget {
     /// Largest relative period error (0.02 = 2 %).
@@ -187,10 +188,10 @@ pub fn predicted_error(integrator: Integrator, h: f64, damping: Damping) -> Opti
     let omega = damping.omega_1()?;
     let zeta = damping.ratio()?;
     let gamma = 2.0 * zeta * omega;
-    let want = crate::dynamic::single_mode::exact(omega, gamma);
-    let got = crate::dynamic::single_mode::discrete(integrator.scheme(), omega, gamma, h)?;
+    let want = crate::response::single_mode::exact(omega, gamma);
+    let got = crate::response::single_mode::discrete(integrator.scheme(), omega, gamma, h)?;
     Some((
-        crate::dynamic::single_mode::period_error(got.period_s, want.period_s),
+        crate::response::single_mode::period_error(got.period_s, want.period_s),
         (got.damping_ratio - want.damping_ratio).abs(),
     ))
 }
@@ -339,7 +340,7 @@ pub struct Simulation {
 impl Simulation {
     /// A mass-spring `model` at rest, one face clamped by `case` (if any) with its loads.
     pub fn new(model: MsmModel, integrator: Integrator, dt: f64, case: Option<&LoadCase>) -> Self {
-        let density = model.node_mass * model.grid.num_nodes() as f64 / crate::grid::CUBE_SIDE_M.powi(3);
+        let density = model.node_mass * model.grid.num_nodes() as f64 / crate::mechanics::grid::CUBE_SIDE_M.powi(3);
         Self::with_tissue(Box::new(MsmTissue::new(model, density)), integrator, dt, case)
     }
 
@@ -535,7 +536,7 @@ impl Simulation {
     /// its rest position (bounded relative to the cube, not to some absolute size), or a kinetic
     /// energy of the whole mass moving at 10 m/s.
     fn unhealthy(&self) -> Option<Unhealthy> {
-        let l = crate::grid::CUBE_SIDE_M;
+        let l = crate::mechanics::grid::CUBE_SIDE_M;
         let (x, v) = (self.tissue.x(), self.tissue.v());
         let finite = x.iter().chain(v).all(|c| c.iter().all(|v| v.is_finite()));
         if !finite {

@@ -8,10 +8,10 @@
 //! node, 0 for a fixed one). Steps must not allocate after their first call.
 
 use super::Integrator;
-use crate::cases::LoadCase;
-use crate::dynamic::damping::Damping;
-use crate::grid::Grid;
-use crate::msm::{Dynamics, MsmModel, MsmParams};
+use crate::mechanics::cases::LoadCase;
+use crate::response::damping::Damping;
+use crate::mechanics::grid::Grid;
+use crate::mechanics::msm::{Dynamics, MsmModel, MsmParams};
 
 /// A tissue model the interactive simulation can step.
 pub trait Tissue: Send + std::fmt::Debug {
@@ -49,7 +49,7 @@ pub trait Tissue: Send + std::fmt::Debug {
     /// ratio set stays set (at the new fundamental).
     fn set_params(&mut self, params: MsmParams) -> Result<(), String>;
     /// Damps the model by the ratio `zeta` at its fundamental on the viewer's scene, mass
-    /// proportionally ([`crate::dynamic::damping`]); refused for the paper's axis lattice.
+    /// proportionally ([`crate::response::damping`]); refused for the paper's axis lattice.
     fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String>;
     /// How the model is damped now.
     fn damping(&self) -> Damping;
@@ -58,10 +58,10 @@ pub trait Tissue: Send + std::fmt::Debug {
 /// The mass-proportional damping of `zeta` for `model` (a lattice), and the rate applied; its
 /// fundamental is solved unless `known` (the same model's).
 fn lattice_ratio_damping(model: &mut MsmModel, zeta: f64, known: Option<f64>) -> Result<Damping, String> {
-    let zeta = crate::dynamic::damping::check_ratio(zeta)?;
+    let zeta = crate::response::damping::check_ratio(zeta)?;
     let omega_1 = match known {
         Some(w) => w,
-        None => crate::dynamic::modal::scene_fundamental(&crate::dynamic::modal::ModalModel::lattice(model)?)?,
+        None => crate::response::modal::scene_fundamental(&crate::response::modal::ModalModel::lattice(model)?)?,
     };
     let damping = Damping::Ratio { zeta, omega_1 };
     model.set_mass_damping(damping.rate());
@@ -92,7 +92,7 @@ impl MsmTissue {
     }
 
     /// The lattice of `params` on the paper's grid for a material of `density`.
-    pub fn build(params: MsmParams, density: f64) -> Result<Self, crate::msm::ParamError> {
+    pub fn build(params: MsmParams, density: f64) -> Result<Self, crate::mechanics::msm::ParamError> {
         Ok(Self::new(MsmModel::new(Grid::paper(), params, density)?, density))
     }
 }
@@ -154,7 +154,7 @@ impl Tissue for MsmTissue {
         let mut model = MsmModel::new(self.model.grid, params, self.density).map_err(|e| e.to_string())?;
         // The paper's axis lattice has no fundamental to set a ratio at: its nodal `d`.
         let damping = match self.ratio {
-            Some(zeta) if params.topology() != crate::msm::Topology::Axis => {
+            Some(zeta) if params.topology() != crate::mechanics::msm::Topology::Axis => {
                 lattice_ratio_damping(&mut model, zeta, None)?
             }
             _ => Damping::Nodal(params.d),

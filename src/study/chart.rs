@@ -17,15 +17,15 @@
 
 use std::time::Instant;
 
-use crate::bench::{time_fallible, time_per_call};
-use crate::cases::{CaseSolution, LoadCase};
-use crate::fem::FemModel;
-use crate::fem::clamped::ClampedSolver;
-use crate::fem::dynamics::{FemDynamics, Formulation};
-use crate::grid::{CUBE_SIDE_M, Grid};
-use crate::material::Material;
-use crate::msm::{Dynamics, MsmModel, MsmParams, Topology, statics};
-use crate::tissue::tissue_params;
+use crate::study::bench::{time_fallible, time_per_call};
+use crate::mechanics::cases::{CaseSolution, LoadCase};
+use crate::mechanics::fem::FemModel;
+use crate::mechanics::fem::clamped::ClampedSolver;
+use crate::mechanics::fem::dynamics::{FemDynamics, Formulation};
+use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::{Dynamics, MsmModel, MsmParams, Topology, statics};
+use crate::sim::shipped::tissue_params;
 
 /// Nodes per axis of the reference FEM.
 pub const REFERENCE_N: usize = 40;
@@ -188,7 +188,7 @@ pub struct ChartPoint {
 /// The steps of the implicit points, s: from 0.1 ms to one frame at 60 Hz.
 pub const IMPLICIT_STEPS_S: [f64; 6] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 1.0 / 60.0];
 /// The damping ratio of every chart point (mass-proportional at each model's fundamental).
-pub const CHART_DAMPING_RATIO: f64 = crate::dynamic::damping::DEFAULT_DAMPING_RATIO;
+pub const CHART_DAMPING_RATIO: f64 = crate::response::damping::DEFAULT_DAMPING_RATIO;
 
 impl ChartPoint {
     /// Wall time to advance `1 / rate_hz` of simulated time: as many steps of `dt_s` as the
@@ -249,8 +249,8 @@ struct Stepping {
 }
 
 impl PointBase<'_> {
-    fn point(&self, st: &Stepping, dynamic: Option<&crate::dynamic::measure::DynamicReport>) -> ChartPoint {
-        let pct = |f: fn(&crate::dynamic::measure::DynamicReport) -> f64| dynamic.map_or(f64::NAN, |d| 100.0 * f(d));
+    fn point(&self, st: &Stepping, dynamic: Option<&crate::validate::dynamic_measure::DynamicReport>) -> ChartPoint {
+        let pct = |f: fn(&crate::validate::dynamic_measure::DynamicReport) -> f64| dynamic.map_or(f64::NAN, |d| 100.0 * f(d));
         ChartPoint {
             object: self.object.into(),
             model: self.model,
@@ -282,9 +282,9 @@ fn points_of(
     shared: &PointBase<'_>,
     explicit: (f64, f64, usize),
     implicit: Option<(f64, usize)>,
-    dynamics: Option<(&crate::dynamic::measure::References, crate::sim::ModelChoice, Option<MsmParams>)>,
+    dynamics: Option<(&crate::validate::dynamic_measure::References, crate::sim::ModelChoice, Option<MsmParams>)>,
 ) -> anyhow::Result<Vec<ChartPoint>> {
-    use crate::dynamic::measure::{Configuration, measure};
+    use crate::validate::dynamic_measure::{Configuration, measure};
     use crate::sim::Integrator;
     let (step_s, dt_max_s, memory_bytes) = explicit;
     let mut steppings =
@@ -408,8 +408,8 @@ fn msm_points(
     opts: &ChartOptions,
     (reference, touch, dynamics): (
         &[Vec<[f64; 3]>],
-        Option<&crate::touch::Reference>,
-        Option<&crate::dynamic::measure::References>,
+        Option<&crate::validate::touch_score::Reference>,
+        Option<&crate::validate::dynamic_measure::References>,
     ),
     alpha: f64,
 ) -> anyhow::Result<Vec<ChartPoint>> {
@@ -446,7 +446,7 @@ fn msm_points(
     let force = match touch {
         Some(reference) => {
             100.0
-                * crate::touch::score::evaluate(reference, material, &crate::touch::ModelUnderTest::Lattice(params))?
+                * crate::validate::touch_score::evaluate(reference, material, &crate::validate::touch_score::ModelUnderTest::Lattice(params))?
                     .worst_force_error
         }
         None => f64::NAN,
@@ -464,8 +464,8 @@ fn fem_points(
     opts: &ChartOptions,
     (reference, touch, dynamics): (
         &[Vec<[f64; 3]>],
-        Option<&crate::touch::Reference>,
-        Option<&crate::dynamic::measure::References>,
+        Option<&crate::validate::touch_score::Reference>,
+        Option<&crate::validate::dynamic_measure::References>,
     ),
     alpha: f64,
 ) -> anyhow::Result<Vec<ChartPoint>> {
@@ -613,8 +613,8 @@ fn damping_rate(material: &Material, kind: ModelKind) -> anyhow::Result<f64> {
 fn dynamic_references(
     material: &Material,
     notes: &mut Vec<String>,
-) -> anyhow::Result<crate::dynamic::measure::References> {
-    let refs = crate::dynamic::measure::References::new(material, CHART_DAMPING_RATIO)?;
+) -> anyhow::Result<crate::validate::dynamic_measure::References> {
+    let refs = crate::validate::dynamic_measure::References::new(material, CHART_DAMPING_RATIO)?;
     for r in &refs.transients {
         let (h, change) = r.history.last().copied().unwrap_or((f64::NAN, f64::NAN));
         notes.push(format!(
@@ -658,7 +658,7 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
             let (touch, dynamics) = if n == Grid::paper().n() {
                 progress(&format!("object {object}: touch benchmark and dynamic reference FEM at {n}^3"));
                 let refs = dynamic_references(&material, &mut notes)?;
-                (Some(crate::touch::Reference::new(&material, grid)?), Some(refs))
+                (Some(crate::validate::touch_score::Reference::new(&material, grid)?), Some(refs))
             } else {
                 (None, None)
             };

@@ -237,8 +237,8 @@ fn conclusion(s: &mut String, chosen: Option<&ChartPoint>, mine: &[&ChartPoint],
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::dynamics::Formulation;
-    use crate::msm::Topology;
+    use crate::mechanics::fem::dynamics::Formulation;
+    use crate::mechanics::msm::Topology;
     use crate::study::chart::{ChartIntegrator, ModelKind};
 
     // Stand-ins for the four kinds of model the test needs.

@@ -2,9 +2,12 @@
 //! stability study of explicit integration ([`stability`]), and the choice of the smallest model
 //! that meets a scene's error and rate budget ([`choose`]).
 
+pub mod bench;
 pub mod chart;
 pub mod choose;
 pub mod plot;
+pub mod reproduce;
+pub mod script;
 pub mod stability;
 
 use std::fmt::Write as _;
@@ -12,10 +15,10 @@ use std::path::Path;
 
 use anyhow::Context as _;
 
-use crate::grid::Grid;
+use crate::mechanics::grid::Grid;
 use crate::io::OutputDir;
-use crate::material::Material;
-use crate::msm::{MsmModel, Topology};
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::{MsmModel, Topology};
 use chart::{ChartOptions, ChartPoint, ModelKind};
 use stability::StabilityPoint;
 
@@ -134,7 +137,7 @@ pub fn read_chart_csv(path: &Path) -> anyhow::Result<Vec<ChartPoint>> {
     for (i, p) in rows.iter().enumerate() {
         let row = i + 2; // the header is line 1
         let bad = |what: String| anyhow::anyhow!("{} line {row}: {what}", path.display());
-        if !(2..=crate::grid::MAX_NODES_PER_AXIS).contains(&p.n) {
+        if !(2..=crate::mechanics::grid::MAX_NODES_PER_AXIS).contains(&p.n) {
             return Err(bad(format!("n = {} nodes per axis is out of range", p.n)));
         }
         for (name, v) in [("step_s", p.step_s), ("static_s", p.static_s)] {
@@ -204,7 +207,7 @@ pub fn write_chart(
          paper's axis lattice, calibrated on the paper's cases and not scorable by touch, is not charted. Touch \
          force errors are scored at the viewer's {n}^3 scene, against the FEM on the same mesh (which therefore \
          scores 0); at other resolutions a point load's answer depends on the mesh, so they show NaN.\n",
-        n = crate::grid::Grid::paper().n()
+        n = crate::mechanics::grid::Grid::paper().n()
     );
     let _ = writeln!(
         md,

@@ -10,12 +10,12 @@
 
 use rand::{RngExt, SeedableRng, rngs::Xoshiro256PlusPlus};
 
-use crate::cases::LoadCase;
-use crate::fem::FemModel;
-use crate::fem::dynamics::{FemDynamics, Formulation};
-use crate::grid::Grid;
-use crate::material::Material;
-use crate::msm::{Dynamics, MsmModel, MsmParams};
+use crate::mechanics::cases::LoadCase;
+use crate::mechanics::fem::FemModel;
+use crate::mechanics::fem::dynamics::{FemDynamics, Formulation};
+use crate::mechanics::grid::Grid;
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::{Dynamics, MsmModel, MsmParams};
 
 /// Steps of one stability run.
 pub const STEPS: usize = 2000;

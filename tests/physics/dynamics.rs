@@ -2,13 +2,13 @@
 //! converged FEM reference, damped releases settling to the static answer, and the viewer's
 //! default step meeting its dynamic targets.
 
-use tissue_sim::dynamic::measure::{Configuration, References, measure, modal_model};
-use tissue_sim::dynamic::reference::{self, Transient, view_scene};
-use tissue_sim::dynamic::single_mode::{self, Scheme};
-use tissue_sim::fem::dynamics::Formulation;
-use tissue_sim::grid::Grid;
-use tissue_sim::material::Material;
-use tissue_sim::msm::Topology;
+use tissue_sim::validate::dynamic_measure::{Configuration, References, measure, modal_model};
+use tissue_sim::validate::dynamic_reference::{self, Transient, view_scene};
+use tissue_sim::response::single_mode::{self, Scheme};
+use tissue_sim::mechanics::fem::dynamics::Formulation;
+use tissue_sim::mechanics::grid::Grid;
+use tissue_sim::mechanics::material::Material;
+use tissue_sim::mechanics::msm::Topology;
 use tissue_sim::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, ModelChoice, Simulation, choose_step};
 
 const ZETA: f64 = 0.2;
@@ -34,7 +34,7 @@ fn measured_release_of_whole_models_matches_the_single_mode_closed_forms() {
     // Backward Euler at one 60 Hz frame swallows the motion: the 15 Hz fundamental then decays
     // at more than twice the damping set.
     let fem = modal_model(&material, ModelChoice::Fem(Formulation::Linear), None).expect("modal");
-    let w = tissue_sim::dynamic::modal::scene_fundamental(&fem).expect("fundamental");
+    let w = tissue_sim::response::modal::scene_fundamental(&fem).expect("fundamental");
     let frame = single_mode::discrete(Scheme::BackwardEuler, w, 2.0 * ZETA * w, 1.0 / 60.0).expect("stable");
     assert!(frame.damping_ratio > 2.0 * ZETA, "{frame:?}");
 }
@@ -43,16 +43,16 @@ fn measured_release_of_whole_models_matches_the_single_mode_closed_forms() {
 fn reference_transients_converge_at_second_order() {
     let material = Material::object_b();
     let grid = Grid::paper();
-    for case in [view_scene(&grid), reference::paper_scene(&grid, "B", 1)] {
+    for case in [view_scene(&grid), dynamic_reference::paper_scene(&grid, "B", 1)] {
         for t in Transient::ALL {
             if t == Transient::ProbeTap && case.id != "view_top_shear_x" {
                 continue; // the tap is the viewer scene's
             }
-            let r = reference::converged(&material, grid, &case, ZETA, t).expect("converges");
+            let r = dynamic_reference::converged(&material, grid, &case, ZETA, t).expect("converges");
             let changes: Vec<f64> = r.history.iter().skip(1).map(|h| h.1).collect();
             let last = *changes.last().expect("halved at least once");
-            assert!(last < reference::CONVERGED, "{}: {:?}", case.id, r.history);
-            assert!(changes[changes.len() - 2] < reference::CONVERGED, "{}: {:?}", case.id, r.history);
+            assert!(last < dynamic_reference::CONVERGED, "{}: {:?}", case.id, r.history);
+            assert!(changes[changes.len() - 2] < dynamic_reference::CONVERGED, "{}: {:?}", case.id, r.history);
             // Newmark is second order: each halving cuts the change about four times (the tap's
             // contact events make it first order and irregular: only overall decrease).
             if t == Transient::ProbeTap {

@@ -1,9 +1,9 @@
 //! The FEM reference against exact answers and its own invariants.
 
-use tissue_sim::cases::{Bc, CaseSolution, LoadCase, benchmark_cases};
-use tissue_sim::fem::{FemModel, StaticSolver};
-use tissue_sim::grid::Grid;
-use tissue_sim::material::Material;
+use tissue_sim::mechanics::cases::{Bc, CaseSolution, LoadCase, benchmark_cases};
+use tissue_sim::mechanics::fem::{FemModel, StaticSolver};
+use tissue_sim::mechanics::grid::Grid;
+use tissue_sim::mechanics::material::Material;
 
 fn max_abs(v: &[[f64; 3]]) -> f64 {
     v.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()))

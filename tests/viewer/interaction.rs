@@ -1,12 +1,12 @@
 //! Scripted interaction (the `simulate` command's engine): deterministic and physically sane.
 
-use tissue_sim::script::{Action, Script, run};
+use tissue_sim::study::script::{Action, Script, run};
 use tissue_sim::sim::Integrator;
 
 fn script(actions: Vec<Action>) -> Script {
     Script {
         object: "A".into(),
-        model: tissue_sim::sim::ModelChoice::Lattice(tissue_sim::msm::Topology::Shear),
+        model: tissue_sim::sim::ModelChoice::Lattice(tissue_sim::mechanics::msm::Topology::Shear),
         dt: 1e-4,
         integrator: None,
         damping_ratio: None,
@@ -133,7 +133,7 @@ fn script_bounds_are_named_before_any_work() {
     let s = script((0..200).map(|_| Action::Wait { duration_s: 100.0, record: false }).collect());
     let e = run(&s).expect_err("too many steps").to_string();
     assert!(e.contains("steps in all") && e.contains("bound"), "{e}");
-    let s = script((0..=tissue_sim::script::MAX_ACTIONS).map(|_| Action::Release { record: false }).collect());
+    let s = script((0..=tissue_sim::study::script::MAX_ACTIONS).map(|_| Action::Release { record: false }).collect());
     assert!(run(&s).expect_err("too many actions").to_string().contains("actions"));
     let s = script((0..300).map(|_| Action::Release { record: true }).collect());
     assert!(run(&s).expect_err("too many recorded").to_string().contains("record"));
@@ -161,7 +161,7 @@ fn soak_drags_probes_and_releases_stay_finite_and_return_to_rest() {
     let top = |i: usize| [(i % 8) as f64 * 0.1 / 7.0, (i / 8 % 8) as f64 * 0.1 / 7.0, 0.1];
     for round in 0..10 {
         let node = 448 + (round * 13) % 64; // top-face nodes
-        let r = tissue_sim::grid::Grid::paper().position(node);
+        let r = tissue_sim::mechanics::grid::Grid::paper().position(node);
         let to = [r[0] + 0.01 * (round % 3) as f64 - 0.01, r[1] + 0.005, r[2] + 0.01];
         actions.push(Action::Drag { node, to, duration_s: 0.3, record: false });
         actions.push(Action::Wait { duration_s: 0.5, record: false });

@@ -1,8 +1,8 @@
 //! Offscreen rendering through the viewer's renderer on whatever adapter exists (software Vulkan,
 //! Mesa lavapipe, in CI): the cube is drawn, and a deformed case differs from the rest shape.
 
-use tissue_sim::msm::Topology;
-use tissue_sim::scene::{ColourMode, StaticScene};
+use tissue_sim::mechanics::msm::Topology;
+use tissue_sim::render::scene::{ColourMode, StaticScene};
 
 fn decode(png: &[u8]) -> image::RgbaImage {
     image::load_from_memory(png).expect("valid PNG").to_rgba8()

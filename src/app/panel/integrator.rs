@@ -3,7 +3,7 @@
 
 use crate::app::physics::Published;
 use crate::app::state::{Request, Shown};
-use crate::dynamic::damping::Damping;
+use crate::response::damping::Damping;
 use crate::sim::Integrator;
 
 /// The damping ratio slider and the running model's dynamic error on its fundamental.

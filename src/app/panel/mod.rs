@@ -4,12 +4,13 @@
 pub mod calibration;
 pub mod integrator;
 pub mod model;
+pub mod study;
 pub mod tools;
 pub mod view;
 
 use super::physics::Published;
 use super::state::{Request, Shown, ViewSettings};
-use super::study_panel::StudyPanel;
+use study::StudyPanel;
 use crate::render::camera::OrbitCamera;
 
 /// What the panel reads and edits besides the viewer state.

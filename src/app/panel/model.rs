@@ -2,8 +2,8 @@
 //! its parameters, edited live.
 
 use crate::app::state::{Request, Shown, ViewSettings};
-use crate::fem::dynamics::Formulation;
-use crate::msm::Topology;
+use crate::mechanics::fem::dynamics::Formulation;
+use crate::mechanics::msm::Topology;
 use crate::sim::ModelChoice;
 
 /// People tell forces apart at about 7 % (Pang, Tan and Durlach 1991).

@@ -6,7 +6,7 @@ use egui_plot::{Line, PlotPoints};
 use super::PanelContext;
 use crate::app::overlay::error_vs_fem;
 use crate::app::state::{Request, Shown, ToolKind, ViewSettings};
-use crate::cases::FORCES_N;
+use crate::mechanics::cases::FORCES_N;
 use crate::sim::Tool;
 
 /// Draws the section.
@@ -86,7 +86,7 @@ pub fn show(
     });
     if let (Some(case), Some(fem)) = (&shown.case_active, &shown.fem_answer) {
         let (avg, max) = error_vs_fem(&ctx.published.positions, ctx.rest, fem);
-        let h = crate::grid::Grid::paper().h();
+        let h = crate::mechanics::grid::Grid::paper().h();
         ui.label(format!(
             "{}: MSM vs FEM now: average {:.3} % of h, max {:.3} % of h",
             case.id,

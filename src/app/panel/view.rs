@@ -2,7 +2,7 @@
 
 use crate::app::state::ViewSettings;
 use crate::render::camera::OrbitCamera;
-use crate::scene::ColourMode;
+use crate::render::scene::ColourMode;
 
 /// Draws the section.
 pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, camera: &mut OrbitCamera) {

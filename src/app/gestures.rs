@@ -1,0 +1,134 @@
+//! Mouse tools and gestures on the 3D view: orbit and zoom the camera, drag a picked node, press
+//! the probe. Gestures turn into [`Request`]s; nothing here talks to the physics thread.
+
+use glam::Vec3;
+
+use crate::app::state::{Request, ToolKind};
+use crate::render::camera::OrbitCamera;
+use crate::render::mesh::SurfaceMesh;
+use crate::sim::Tool;
+
+/// How far a tool reaches into or away from the tissue, metres (half the cube's side).
+const MAX_REACH_M: f32 = 0.05;
+
+/// The mouse gesture in progress.
+#[derive(Debug, Clone, Copy, Default)]
+pub enum Gesture {
+    /// Nothing held.
+    #[default]
+    None,
+    /// Rotating the camera.
+    Orbit,
+    /// Pulling `node` in the camera-facing plane through `plane_point`.
+    Drag {
+        /// The held node.
+        node: usize,
+        /// A point of the drag plane.
+        plane_point: Vec3,
+    },
+    /// Pressing the probe along `dir` from where it first touched.
+    Probe {
+        /// First contact point.
+        contact: Vec3,
+        /// Push direction (the view ray).
+        dir: Vec3,
+        /// Pointer height at the start, pixels.
+        start_y: f32,
+    },
+}
+
+/// What a gesture reads of the scene.
+pub struct Scene<'a> {
+    /// The surface, for picking.
+    pub mesh: &'a SurfaceMesh,
+    /// Node positions now.
+    pub positions: &'a [[f32; 3]],
+    /// Force of the tissue on the tool now, newtons.
+    pub tool_force: [f64; 3],
+    /// The left-button tool.
+    pub tool: ToolKind,
+    /// Probe radius, mm.
+    pub probe_radius_mm: f64,
+}
+
+/// Handles the pointer on the 3D view (`response`), moving `camera` and pushing tool requests.
+pub fn view_input(
+    response: &egui::Response,
+    ctx: &egui::Context,
+    camera: &mut OrbitCamera,
+    gesture: &mut Gesture,
+    scene: &Scene<'_>,
+    requests: &mut Vec<Request>,
+) {
+    let rect = response.rect;
+    let aspect = rect.width() / rect.height().max(1.0);
+    let ndc = |p: egui::Pos2| {
+        [2.0 * (p.x - rect.left()) / rect.width() - 1.0, 1.0 - 2.0 * (p.y - rect.top()) / rect.height()]
+    };
+    if response.hovered() {
+        let scroll = ctx.input(|i| i.smooth_scroll_delta.y);
+        if scroll != 0.0 {
+            camera.zoom(scroll / 50.0);
+        }
+    }
+    if response.dragged_by(egui::PointerButton::Secondary)
+        || (response.dragged_by(egui::PointerButton::Primary) && scene.tool == ToolKind::Orbit)
+    {
+        let d = response.drag_delta();
+        camera.rotate(d.x, d.y);
+        *gesture = Gesture::Orbit;
+    }
+    if response.drag_started_by(egui::PointerButton::Primary)
+        && scene.tool != ToolKind::Orbit
+        && let Some(pos) = response.interact_pointer_pos()
+    {
+        let (o, d) = camera.ray(ndc(pos), aspect);
+        if let Some((hit, node)) = scene.mesh.pick(o.to_array(), d.to_array()) {
+            *gesture = match scene.tool {
+                ToolKind::Drag => Gesture::Drag { node, plane_point: Vec3::from(scene.positions[node]) },
+                ToolKind::Probe => {
+                    requests.push(Request::ProbeStarted);
+                    Gesture::Probe { contact: Vec3::from(hit), dir: d, start_y: pos.y }
+                }
+                ToolKind::Orbit => Gesture::None,
+            };
+        }
+    }
+    if response.dragged_by(egui::PointerButton::Primary)
+        && let Some(pos) = response.interact_pointer_pos()
+    {
+        match *gesture {
+            Gesture::Drag { node, plane_point } => {
+                let (o, d) = camera.ray(ndc(pos), aspect);
+                let n = (camera.eye() - camera.target).normalize();
+                let denom = d.dot(n);
+                if denom.abs() > 1e-6 {
+                    let t = (plane_point - o).dot(n) / denom;
+                    // At most half the cube's side from where the node was picked: the drag
+                    // spring then pulls at most 50 N, and the blow-up guard (one side from rest)
+                    // is never the limit of a long mouse drag.
+                    let target = plane_point + (o + t * d - plane_point).clamp_length_max(MAX_REACH_M);
+                    requests.push(Request::Tool(Tool::Drag { node, target: target.as_dvec3().to_array() }));
+                }
+            }
+            Gesture::Probe { contact, dir, start_y } => {
+                let r = (scene.probe_radius_mm * 1e-3) as f32;
+                // 0.1 mm of indentation per pixel dragged downwards, at most half the cube's side.
+                let depth = ((pos.y - start_y) * 1e-4).clamp(0.0, MAX_REACH_M);
+                let centre = contact - r * dir + depth * dir;
+                requests
+                    .push(Request::Tool(Tool::Probe { centre: centre.as_dvec3().to_array(), radius: f64::from(r) }));
+                let f = scene.tool_force;
+                let along = -(f[0] * f64::from(dir.x) + f[1] * f64::from(dir.y) + f[2] * f64::from(dir.z));
+                requests.push(Request::ForceSample([f64::from(depth) * 1e3, along.max(0.0)]));
+            }
+            _ => {}
+        }
+    }
+    if response.drag_stopped() {
+        if matches!(*gesture, Gesture::Drag { .. } | Gesture::Probe { .. }) {
+            requests.push(Request::Tool(Tool::None));
+        }
+        *gesture = Gesture::None;
+    }
+}

@@ -1,0 +1,110 @@
+//! The trilinear 8-node hexahedron (hex8 / Q1) on an axis-aligned cube, full 2x2x2 Gauss rule.
+
+use nalgebra::{Matrix6, SMatrix};
+
+/// A 24 x 24 element stiffness matrix; dof `3 a + c` is component `c` of local node `a`.
+pub type ElementStiffness = SMatrix<f64, 24, 24>;
+
+/// Natural coordinates of the 8 nodes, in the spec's element node order.
+pub const NODE_SIGNS: [[f64; 3]; 8] = [
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+];
+
+/// Strain-displacement matrix `B` (Voigt order 11, 22, 33, 23, 13, 12, engineering shear) at
+/// natural point `xi` of a cube of side `h`.
+pub fn strain_displacement(xi: [f64; 3], h: f64) -> SMatrix<f64, 6, 24> {
+    let mut b = SMatrix::<f64, 6, 24>::zeros();
+    // x = x0 + h/2 (xi + 1): d/dx = (2/h) d/dxi.
+    let scale = 2.0 / h;
+    for (a, s) in NODE_SIGNS.iter().enumerate() {
+        let f = |d: usize| 1.0 + s[d] * xi[d];
+        let dx = scale * 0.125 * s[0] * f(1) * f(2);
+        let dy = scale * 0.125 * s[1] * f(0) * f(2);
+        let dz = scale * 0.125 * s[2] * f(0) * f(1);
+        let (cx, cy, cz) = (3 * a, 3 * a + 1, 3 * a + 2);
+        b[(0, cx)] = dx;
+        b[(1, cy)] = dy;
+        b[(2, cz)] = dz;
+        b[(3, cy)] = dz; // gamma_23 = du_y/dz + du_z/dy
+        b[(3, cz)] = dy;
+        b[(4, cx)] = dz; // gamma_13 = du_x/dz + du_z/dx
+        b[(4, cz)] = dx;
+        b[(5, cx)] = dy; // gamma_12 = du_x/dy + du_y/dx
+        b[(5, cy)] = dx;
+    }
+    b
+}
+
+/// Element stiffness `K_e = sum_g B^T C B det(J) w_g` of a cube of side `h` with material
+/// stiffness `c`, 2x2x2 Gauss points at `+-1/sqrt(3)` (exact for this element shape).
+pub fn hex8_stiffness(c: &Matrix6<f64>, h: f64) -> ElementStiffness {
+    let g = 1.0 / 3f64.sqrt();
+    let det_j = (0.5 * h).powi(3);
+    let mut ke = ElementStiffness::zeros();
+    for &sx in &[-g, g] {
+        for &sy in &[-g, g] {
+            for &sz in &[-g, g] {
+                let b = strain_displacement([sx, sy, sz], h);
+                ke += b.transpose() * (c * b) * det_j;
+            }
+        }
+    }
+    (ke + ke.transpose()) * 0.5
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mechanics::material::Material;
+
+    #[test]
+    fn rigid_modes_have_no_energy() {
+        let m = Material::object_a();
+        let h = 0.1 / 7.0;
+        let ke = hex8_stiffness(&m.stiffness, h);
+        let scale = ke.abs().max();
+        // Translations and an infinitesimal rotation about z: u = (-y, x, 0).
+        for mode in 0..4 {
+            let mut u = SMatrix::<f64, 24, 1>::zeros();
+            for (a, s) in NODE_SIGNS.iter().enumerate() {
+                let p = s.map(|v| 0.5 * h * (v + 1.0));
+                match mode {
+                    0..=2 => u[3 * a + mode] = 1.0,
+                    _ => {
+                        u[3 * a] = -p[1];
+                        u[3 * a + 1] = p[0];
+                    }
+                }
+            }
+            let r = (ke * u).abs().max();
+            assert!(r < 1e-12 * scale, "mode {mode}: {r}");
+        }
+    }
+
+    #[test]
+    fn uniform_strain_energy_is_exact() {
+        // For u = eps . x, the element energy is V/2 eps^T C eps exactly.
+        let m = Material::object_b();
+        let h = 0.02;
+        let ke = hex8_stiffness(&m.stiffness, h);
+        let eps = nalgebra::Vector6::new(1e-3, -2e-4, 5e-4, 3e-4, -1e-4, 2e-4);
+        let mut u = SMatrix::<f64, 24, 1>::zeros();
+        for (a, s) in NODE_SIGNS.iter().enumerate() {
+            let p = s.map(|v| 0.5 * h * (v + 1.0));
+            // Displacement gradient with symmetric shear (gamma = 2 eps_ij).
+            u[3 * a] = eps[0] * p[0] + 0.5 * eps[5] * p[1] + 0.5 * eps[4] * p[2];
+            u[3 * a + 1] = 0.5 * eps[5] * p[0] + eps[1] * p[1] + 0.5 * eps[3] * p[2];
+            u[3 * a + 2] = 0.5 * eps[4] * p[0] + 0.5 * eps[3] * p[1] + eps[2] * p[2];
+        }
+        let e_fem = 0.5 * (u.transpose() * ke * u)[(0, 0)];
+        let e_exact = 0.5 * h.powi(3) * (eps.transpose() * m.stiffness * eps)[(0, 0)];
+        assert!((e_fem - e_exact).abs() < 1e-12 * e_exact, "{e_fem} vs {e_exact}");
+    }
+}

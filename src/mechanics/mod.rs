@@ -1,0 +1,17 @@
+//! Layer 1, the mechanics: the cube, its material, its load cases and the two models of it.
+//!
+//! - [`grid`]: nodes, elements and spring families of the cube; [`material`]: engineering
+//!   constants, `S` and `C`; [`cases`]: the benchmark's load cases and their answers;
+//!   [`displacement_file`]: the spec's JSON of case answers.
+//! - [`sparse`]: faer's sparse Cholesky behind one SPD system type.
+//! - [`fem`]: hex8 statics and dynamics; [`msm`]: the mass-spring lattices, statics and dynamics.
+//!
+//! May use: [`crate::io`] only. Knows no simulation, calibration, GPU or command line.
+
+pub mod cases;
+pub mod displacement_file;
+pub mod fem;
+pub mod grid;
+pub mod material;
+pub mod msm;
+pub mod sparse;

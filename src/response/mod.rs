@@ -1,0 +1,18 @@
+//! Layer 2, the linear response shared by calibration, validation, dynamics and the simulation:
+//! what a model does at rest, in small displacements, on the viewer's scene (face z = 0 clamped).
+//!
+//! - [`linear`]: a lattice's stiffness as a sum over spring groups, the scene's sparse solver, the
+//!   probe's sphere geometry and its active-set contact solve.
+//! - [`modes`]: the lowest natural modes of a scene solver; [`modal`]: a model's rest stiffness
+//!   and lumped masses, its modes on any clamp.
+//! - [`damping`]: damping as a ratio `zeta` at the fundamental (mass-proportional Rayleigh
+//!   damping, `C = 2 zeta omega_1 M`); [`single_mode`]: what each integrator does to one damped
+//!   mode, in closed form.
+//!
+//! May use: [`crate::mechanics`], [`crate::io`].
+
+pub mod damping;
+pub mod linear;
+pub mod modal;
+pub mod modes;
+pub mod single_mode;

@@ -1,0 +1,103 @@
+//! The calibrated tissues shipped in `assets/`: the mass-spring parameters of the preset objects
+//! `A` and `B` for each lattice topology, and the scores each was measured to have on the touch
+//! benchmark's validation set (cases its calibration never saw).
+//!
+//! The shear and hex lattices are calibrated on the touch benchmark's training cases
+//! (`calibrate --cases touch`), the paper's axis lattice on the paper's nine face loads (it has no
+//! shear stiffness at rest, so no touch case can train it). The default tissue is the lattice
+//! that scores best on the validation set: the hex lattice, for both objects.
+
+use anyhow::Context as _;
+
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::{MsmParams, Topology};
+
+/// The topology of the default tissue (the viewer's, `simulate`'s and `validate`'s): the lattice
+/// with the smallest validation force error (see [`shipped`] and `assets/`).
+pub const DEFAULT_TOPOLOGY: Topology = Topology::Hex;
+
+/// The validation scores recorded in a shipped tissue file (`validate --json`, validation set).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RecordedScores {
+    /// Largest `|1 - compliance ratio|` over the validation touches.
+    pub worst_force_error: f64,
+    /// Median over the validation touches.
+    pub median_force_error: f64,
+    /// Largest `|1 - f / f_fem|` over the lowest six modes.
+    pub worst_frequency_error: f64,
+}
+
+/// A shipped tissue: its parameters, the training cases of its calibration, and its recorded
+/// validation scores (none for the axis lattice, which the touch benchmark cannot score).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+pub struct Shipped {
+    /// The parameters.
+    pub params: MsmParams,
+    /// `paper` or `touch`.
+    #[serde(default = "paper_cases")]
+    pub cases: CaseSet,
+    /// Scores on the touch benchmark's validation set.
+    #[serde(default)]
+    pub validation: Option<RecordedScores>,
+}
+
+fn paper_cases() -> CaseSet {
+    CaseSet::Paper
+}
+
+/// The training cases of a calibration (the static cost's), and of a shipped tissue.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CaseSet {
+    /// The paper's nine clamped face loads (eq. 1), the default.
+    Paper,
+    /// The touch benchmark's training cases (point loads, top shear, probe).
+    Touch,
+    /// Both: the touch cost plus the paper's cost relative to the FEM's displacements.
+    Both,
+}
+
+impl CaseSet {
+    /// The lower-case name used on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            CaseSet::Paper => "paper",
+            CaseSet::Touch => "touch",
+            CaseSet::Both => "both",
+        }
+    }
+}
+
+/// The calibrated tissue parameters shipped in `assets/` for object `A` or `B` (see [`shipped`]).
+pub fn tissue_params(material: &Material, topology: Topology) -> anyhow::Result<MsmParams> {
+    Ok(shipped(material, topology)?.params)
+}
+
+/// The default tissue of a preset material ([`DEFAULT_TOPOLOGY`]).
+pub fn default_params(material: &Material) -> anyhow::Result<MsmParams> {
+    tissue_params(material, DEFAULT_TOPOLOGY)
+}
+
+/// The shipped tissue of object `A` or `B` for `topology`: the shear and hex lattices calibrated
+/// on the touch benchmark's training cases, the axis lattice on the paper's cases (hybrid GA+SA,
+/// seed 1, static cost, then the L-BFGS polish; see each file's `note`).
+pub fn shipped(material: &Material, topology: Topology) -> anyhow::Result<Shipped> {
+    let is_preset = Material::preset(&material.name)
+        .is_some_and(|p| p.constants == material.constants && p.density == material.density);
+    if !is_preset {
+        anyhow::bail!(
+            "no calibrated tissue is shipped for material {:?} (only the presets A and B); calibrate one",
+            material.name
+        );
+    }
+    let text = match (material.name.as_str(), topology) {
+        ("A", Topology::Shear) => include_str!("../../assets/tissue_A_shear.json"),
+        ("B", Topology::Shear) => include_str!("../../assets/tissue_B_shear.json"),
+        ("A", Topology::Axis) => include_str!("../../assets/tissue_A_axis.json"),
+        ("B", Topology::Axis) => include_str!("../../assets/tissue_B_axis.json"),
+        ("A", Topology::Hex) => include_str!("../../assets/tissue_A_hex.json"),
+        ("B", Topology::Hex) => include_str!("../../assets/tissue_B_hex.json"),
+        (other, _) => anyhow::bail!("no calibrated tissue is shipped for object {other:?}; calibrate one"),
+    };
+    serde_json::from_str(text).context("assets: invalid tissue file")
+}

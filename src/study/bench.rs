@@ -1,0 +1,243 @@
+//! `tissue-sim bench`: timings of the physics core, median of repeated batches, one thread.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use crate::mechanics::cases::{Bc, LoadCase, benchmark_cases};
+use crate::mechanics::fem::FemModel;
+use crate::mechanics::grid::Grid;
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::statics::{self, NewtonOptions};
+use crate::mechanics::msm::{Dynamics, MsmModel, MsmParams};
+
+/// Benchmark results, seconds.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct BenchReport {
+    /// One symplectic Euler step of the axis-spring MSM (paper's model), keyed by nodes per axis.
+    pub msm_explicit_step_s: BTreeMap<usize, f64>,
+    /// One symplectic Euler step of the shear-spring MSM, keyed by nodes per axis.
+    pub msm_shear_explicit_step_s: BTreeMap<usize, f64>,
+    /// One linearised implicit Euler step (assembly + factorisation + solve), keyed by nodes per axis.
+    pub msm_implicit_step_s: BTreeMap<usize, f64>,
+    /// One prefactored implicit Euler step (force pass + one solve with the rest tangent factorised
+    /// once), paper's model, keyed by nodes per axis.
+    pub msm_prefactored_step_s: BTreeMap<usize, f64>,
+    /// The same for the hex-element lattice (object A's shipped tissue).
+    pub msm_hex_prefactored_step_s: BTreeMap<usize, f64>,
+    /// FEM: assembly, one factorisation per fixed face, 9 solves (object A, 8^3).
+    pub fem_static_9_cases_s: f64,
+    /// Static MSM equilibrium of the 9 clamped cases, paper's model (closed form).
+    pub msm_static_9_cases_s: f64,
+    /// The same 9 cases through the general Newton solver (the check of the fast path).
+    pub msm_static_9_cases_newton_s: f64,
+    /// Newton on the 9 cases of the shear-spring model.
+    pub msm_shear_static_9_cases_newton_s: f64,
+    /// One 1 ms physics tick of the viewer's scene (face z = 0 clamped, object A, 8^3) with the
+    /// probe pressed 4 mm into the top face, keyed by `model/integrator/dt`: the viewer keeps up
+    /// with 1 kHz real time when this is below 1 ms.
+    pub viewer_tick_with_probe_s: BTreeMap<String, f64>,
+}
+
+/// One 1 ms tick of `model` in the viewer's scene with the probe pressed 4 mm into the top face
+/// (after 0.2 s of settling), stepping `integrator` at `dt`.
+fn probe_tick(model: crate::sim::ModelChoice, integrator: crate::sim::Integrator, dt: f64) -> anyhow::Result<f64> {
+    use crate::sim::{Simulation, Tool};
+    let material = Material::object_a();
+    let grid = Grid::paper();
+    let tissue = model.build(&material, None, crate::response::damping::DEFAULT_DAMPING_RATIO)?;
+    let mut sim = Simulation::with_tissue(tissue, integrator, dt, Some(&LoadCase::bottom_clamp(&grid, "A")));
+    let r = crate::validate::touch::PROBE_RADIUS_M;
+    sim.tool = Tool::Probe { centre: [0.05, 0.05, crate::mechanics::grid::CUBE_SIDE_M + r - 0.004], radius: r };
+    let steps = (1e-3 / dt).round().max(1.0) as usize;
+    let mut failed = None;
+    for _ in 0..(0.2 / dt) as usize {
+        if let Err(e) = sim.step() {
+            failed = Some(e.message);
+        }
+    }
+    let t = time_per_call(1.0, || {
+        for _ in 0..steps {
+            if let Err(e) = sim.step() {
+                failed = Some(e.message.clone());
+            }
+        }
+    });
+    match failed {
+        Some(m) => anyhow::bail!("{} with {} at dt = {dt}: {m}", model.name(), integrator.name()),
+        None => Ok(t),
+    }
+}
+
+/// Median time per call of `f`, from batches of at least ~20 ms over about `budget_s` seconds.
+pub fn time_per_call(budget_s: f64, mut f: impl FnMut()) -> f64 {
+    f();
+    let t = Instant::now();
+    f();
+    let one = t.elapsed().as_secs_f64().max(1e-9);
+    let per_batch = ((0.02 / one).ceil() as usize).max(1);
+    let batches = ((budget_s / (one * per_batch as f64)) as usize).clamp(5, 51);
+    let mut samples: Vec<f64> = (0..batches)
+        .map(|_| {
+            let t = Instant::now();
+            for _ in 0..per_batch {
+                f();
+            }
+            t.elapsed().as_secs_f64() / per_batch as f64
+        })
+        .collect();
+    samples.sort_by(f64::total_cmp);
+    samples[samples.len() / 2]
+}
+
+/// [`time_per_call`] of a fallible `f`: the first error, if any call fails.
+pub fn time_fallible<E>(budget_s: f64, mut f: impl FnMut() -> Result<(), E>) -> Result<f64, E> {
+    let mut failed = None;
+    let t = time_per_call(budget_s, || {
+        if let Err(e) = f() {
+            failed.get_or_insert(e);
+        }
+    });
+    failed.map_or(Ok(t), Err)
+}
+
+fn paper_params() -> MsmParams {
+    MsmParams::axis(968.2, 1010.0, 1137.7, 0.5)
+}
+
+fn shear_params() -> MsmParams {
+    MsmParams { c12: Some(300.0), c13: Some(300.0), c23: Some(300.0), ..paper_params() }
+}
+
+fn explicit_step(n: usize, params: MsmParams) -> anyhow::Result<f64> {
+    let grid = Grid::new(n)?;
+    let model = MsmModel::new(grid, params, crate::mechanics::material::TISSUE_DENSITY)?;
+    let mut dynamics = Dynamics::new(&model);
+    dynamics.apply_case(&LoadCase::clamped(&grid, "A", 1, 1.0));
+    // Far below the stability limit at every resolution benchmarked.
+    let dt = 1e-7;
+    Ok(time_per_call(0.5, || dynamics.step_symplectic(&model, dt)))
+}
+
+fn implicit_step(n: usize, params: MsmParams, prefactored: bool) -> anyhow::Result<f64> {
+    let grid = Grid::new(n)?;
+    let model = MsmModel::new(grid, params, crate::mechanics::material::TISSUE_DENSITY)?;
+    let mut dynamics = Dynamics::new(&model);
+    dynamics.apply_case(&LoadCase::clamped(&grid, "A", 1, 1.0));
+    let step =
+        |d: &mut Dynamics| if prefactored { d.step_prefactored(&model, 1e-3) } else { d.step_implicit(&model, 1e-3) };
+    step(&mut dynamics)?;
+    Ok(time_fallible(0.5, || step(&mut dynamics))?)
+}
+
+/// Runs every benchmark (about 10 s in a release build).
+pub fn run() -> anyhow::Result<BenchReport> {
+    let mut msm_explicit_step_s = BTreeMap::new();
+    let mut msm_shear_explicit_step_s = BTreeMap::new();
+    for n in [8, 16, 32] {
+        msm_explicit_step_s.insert(n, explicit_step(n, paper_params())?);
+        msm_shear_explicit_step_s.insert(n, explicit_step(n, shear_params())?);
+    }
+    let mut msm_implicit_step_s = BTreeMap::new();
+    for n in [8, 16] {
+        msm_implicit_step_s.insert(n, implicit_step(n, paper_params(), false)?);
+    }
+    let hex = crate::sim::shipped::tissue_params(&Material::object_a(), crate::mechanics::msm::Topology::Hex)?;
+    let mut msm_prefactored_step_s = BTreeMap::new();
+    let mut msm_hex_prefactored_step_s = BTreeMap::new();
+    for n in [8, 16, 32] {
+        msm_prefactored_step_s.insert(n, implicit_step(n, paper_params(), true)?);
+    }
+    for n in [8, 16] {
+        msm_hex_prefactored_step_s.insert(n, implicit_step(n, hex, true)?);
+    }
+    let grid = Grid::paper();
+    let material = Material::object_a();
+    let cases = benchmark_cases(&grid, "A", Bc::Clamped);
+    let mut err = None;
+    let fem_static_9_cases_s = time_per_call(1.0, || {
+        if let Err(e) = FemModel::new(grid, &material).solve_cases(&cases) {
+            err = Some(e);
+        }
+    });
+    if let Some(e) = err {
+        return Err(e.into());
+    }
+    let model = MsmModel::new(grid, paper_params(), material.density)?;
+    let msm_static_9_cases_s = time_per_call(0.5, || {
+        for c in &cases {
+            std::hint::black_box(statics::equilibrium(&model, c).ok());
+        }
+    });
+    let newton = |model: &MsmModel| {
+        time_per_call(1.0, || {
+            for c in &cases {
+                std::hint::black_box(statics::solve_newton(model, c, NewtonOptions::default()).ok());
+            }
+        })
+    };
+    let msm_static_9_cases_newton_s = newton(&model);
+    let shear = MsmModel::new(grid, shear_params(), material.density)?;
+    let msm_shear_static_9_cases_newton_s = newton(&shear);
+    let mut viewer_tick_with_probe_s = BTreeMap::new();
+    {
+        use crate::mechanics::fem::dynamics::Formulation;
+        use crate::sim::{Integrator, ModelChoice};
+        for (model, integrator, dt) in [
+            (ModelChoice::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY), Integrator::Symplectic, 1e-4),
+            (ModelChoice::Fem(Formulation::Corotational), Integrator::Symplectic, 1e-4),
+            // The viewer's automatic choice for the FEM's 1 ms request (the dynamic budget).
+            (ModelChoice::Fem(Formulation::Corotational), Integrator::Symplectic, 2.5e-4),
+            (ModelChoice::Fem(Formulation::Linear), Integrator::Symplectic, 2.5e-4),
+            (ModelChoice::Fem(Formulation::Corotational), Integrator::Prefactored, 1e-3),
+            (ModelChoice::Fem(Formulation::Linear), Integrator::Prefactored, 1e-3),
+        ] {
+            let key = format!("{}/{}/{dt}", model.name(), integrator.name());
+            viewer_tick_with_probe_s.insert(key, probe_tick(model, integrator, dt)?);
+        }
+    }
+    Ok(BenchReport {
+        viewer_tick_with_probe_s,
+        msm_explicit_step_s,
+        msm_shear_explicit_step_s,
+        msm_implicit_step_s,
+        msm_prefactored_step_s,
+        msm_hex_prefactored_step_s,
+        fem_static_9_cases_s,
+        msm_static_9_cases_s,
+        msm_static_9_cases_newton_s,
+        msm_shear_static_9_cases_newton_s,
+    })
+}
+
+impl BenchReport {
+    /// A human-readable summary.
+    pub fn to_text(&self) -> String {
+        let mut s = String::from("tissue-sim bench (one thread, median of batches)\n");
+        let us = |t: f64| format!("{:10.2} us", t * 1e6);
+        for (name, map) in [
+            ("MSM explicit step, axis springs", &self.msm_explicit_step_s),
+            ("MSM explicit step, shear springs", &self.msm_shear_explicit_step_s),
+            ("MSM implicit step, axis springs", &self.msm_implicit_step_s),
+            ("MSM prefactored implicit step, axis", &self.msm_prefactored_step_s),
+            ("MSM prefactored implicit step, hex", &self.msm_hex_prefactored_step_s),
+        ] {
+            for (n, t) in map {
+                s += &format!("{name:<40} n={n:>3}: {}\n", us(*t));
+            }
+        }
+        s += &format!("{:<46}: {}\n", "FEM static, 9 clamped cases (A, 8^3)", us(self.fem_static_9_cases_s));
+        s += &format!("{:<46}: {}\n", "MSM static, 9 cases, closed form", us(self.msm_static_9_cases_s));
+        s += &format!("{:<46}: {}\n", "MSM static, 9 cases, Newton (axis)", us(self.msm_static_9_cases_newton_s));
+        s +=
+            &format!("{:<46}: {}\n", "MSM static, 9 cases, Newton (shear)", us(self.msm_shear_static_9_cases_newton_s));
+        for (key, t) in &self.viewer_tick_with_probe_s {
+            s += &format!(
+                "{:<46}: {} ({:.0} ticks/s possible)\n",
+                format!("viewer 1 ms tick + probe, {key}"),
+                us(*t),
+                1.0 / t
+            );
+        }
+        s
+    }
+}

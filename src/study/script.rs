@@ -1,0 +1,472 @@
+//! `tissue-sim simulate`: a scripted sequence of tool actions run on the interactive simulation
+//! with no rendering, for regression tests of interaction. Deterministic: the same script gives
+//! the same bytes.
+//!
+//! ```json
+//! { "object": "A", "model": "hex", "dt": 1e-4, "integrator": "symplectic",
+//!   "damping_ratio": 0.2, "clamp": "bottom",
+//!   "actions": [
+//!     { "drag":    { "node": 511, "to": [0.11, 0.1, 0.1], "duration_s": 0.2 } },
+//!     { "release": {} },
+//!     { "probe":   { "at": [0.05, 0.05, 0.1], "direction": [0, 0, -1], "radius": 0.01,
+//!                    "depth": 0.004, "duration_s": 0.2, "samples": 8 } },
+//!     { "wait":    { "duration_s": 0.5 } } ] }
+//! ```
+//! `damping_ratio` is the ratio at the fundamental (mass-proportional, see
+//! [`crate::response::damping`]; default 0.2; not for the axis lattice, which keeps the paper's
+//! nodal `d`). `clamp` is `bottom` (face z = 0 held, the viewer's default), `none`, or a case id such as
+//! `A_clamped_ax1_F10` (its fixed face and loads). A drag moves its target linearly from the
+//! node's position to `to` over `duration_s` and holds it there until `release`; a probe starts
+//! touching `at` and is pushed along `direction` to `depth` over `duration_s`, recording the
+//! force on it at `samples` evenly spaced depths, and stays until `release`.
+//!
+//! Every action takes an optional `"record": true`: its event then carries all node positions
+//! (the last action's event always does). Bounds that no script can exceed, each named in its
+//! error: [`MAX_TOTAL_STEPS`] steps in all, [`MAX_ACTIONS`] actions, [`MAX_RECORDED`] recorded
+//! events, [`MAX_SAMPLES`] probe samples; the output (compact JSON) is then at most a few MB.
+//! Points and sizes are in metres and must lie near the cube (within one side of it). The blow-up
+//! guard stops the run with an error after [`crate::sim::MAX_RECOVERIES`] blow-ups in a row, and
+//! a symplectic integrator forced above its stability limit is refused before any step.
+
+use serde::{Deserialize, Serialize};
+
+use crate::mechanics::cases::{LoadCase, parse_case_id};
+use crate::mechanics::grid::Grid;
+use crate::mechanics::material::Material;
+use crate::sim::{Integrator, ModelChoice, Simulation, Tool, choose_integrator};
+
+/// A script.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Script {
+    /// `A` or `B`.
+    pub object: String,
+    /// `hex` (the default tissue), `shear`, `axis`, `fem-linear` or `fem-corotational`.
+    #[serde(default = "default_model")]
+    pub model: ModelChoice,
+    /// Time step, s (default 1e-4).
+    #[serde(default = "default_dt")]
+    pub dt: f64,
+    /// Integrator (default: symplectic when safe for `dt`, implicit otherwise).
+    pub integrator: Option<Integrator>,
+    /// Damping ratio at the fundamental (default [`crate::response::damping::DEFAULT_DAMPING_RATIO`]);
+    /// the paper's axis lattice keeps its nodal `d` and refuses one.
+    pub damping_ratio: Option<f64>,
+    /// `bottom`, `none` or a case id (default `bottom`).
+    #[serde(default = "default_clamp")]
+    pub clamp: String,
+    /// The actions, in order.
+    pub actions: Vec<Action>,
+}
+
+fn default_model() -> ModelChoice {
+    ModelChoice::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY)
+}
+fn default_dt() -> f64 {
+    1e-4
+}
+fn default_clamp() -> String {
+    "bottom".into()
+}
+
+/// Total steps of a script, all actions together.
+pub const MAX_TOTAL_STEPS: u64 = 10_000_000;
+/// Actions of a script.
+pub const MAX_ACTIONS: usize = 100_000;
+/// Events that carry node positions (`"record": true`, and the last).
+pub const MAX_RECORDED: usize = 200;
+/// Probe samples, all probe actions together.
+pub const MAX_SAMPLES: usize = 100_000;
+/// Blow-up messages listed (the guard stops a run long before, unless blow-ups keep recurring
+/// after healthy stretches).
+pub const MAX_BLOW_UPS: usize = 100;
+
+/// One scripted action.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+#[allow(missing_docs)]
+pub enum Action {
+    /// Pull a node towards a point.
+    Drag {
+        node: usize,
+        to: [f64; 3],
+        duration_s: f64,
+        #[serde(default)]
+        record: bool,
+    },
+    /// Push the spherical probe into the tissue.
+    Probe {
+        at: [f64; 3],
+        direction: [f64; 3],
+        radius: f64,
+        depth: f64,
+        duration_s: f64,
+        #[serde(default = "default_samples")]
+        samples: usize,
+        #[serde(default)]
+        record: bool,
+    },
+    /// Let go of whatever tool is held.
+    Release {
+        #[serde(default)]
+        record: bool,
+    },
+    /// Let time pass.
+    Wait {
+        duration_s: f64,
+        #[serde(default)]
+        record: bool,
+    },
+}
+
+impl Action {
+    /// Whether the action asks for node positions in its event.
+    pub fn record(&self) -> bool {
+        match self {
+            Action::Drag { record, .. }
+            | Action::Probe { record, .. }
+            | Action::Release { record }
+            | Action::Wait { record, .. } => *record,
+        }
+    }
+
+    fn duration_s(&self) -> f64 {
+        match self {
+            Action::Drag { duration_s, .. } | Action::Probe { duration_s, .. } | Action::Wait { duration_s, .. } => {
+                *duration_s
+            }
+            Action::Release { .. } => 0.0,
+        }
+    }
+}
+
+fn default_samples() -> usize {
+    10
+}
+
+/// The state at the end of an action.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Event {
+    /// Index of the action.
+    pub action: usize,
+    /// `drag`, `probe`, `release` or `wait`.
+    pub kind: String,
+    /// Simulated time, s.
+    pub time_s: f64,
+    /// Force of the tissue on the tool, newtons.
+    pub tool_force_n: [f64; 3],
+    /// Largest distance of a node from its rest position, metres.
+    pub max_displacement_m: f64,
+    /// Node positions, metres: only for an action with `"record": true`, and the last.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub positions: Option<Vec<[f64; 3]>>,
+}
+
+/// One probe sample.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProbeSample {
+    /// Index of the probe action.
+    pub action: usize,
+    /// Indentation depth, metres.
+    pub depth_m: f64,
+    /// Force of the tissue on the probe along `-direction`, newtons.
+    pub force_n: f64,
+}
+
+/// What a script produced.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Outcome {
+    /// Object label.
+    pub object: String,
+    /// Model.
+    pub model: ModelChoice,
+    /// Integrator used.
+    pub integrator: Integrator,
+    /// Time step, s.
+    pub dt: f64,
+    /// Nodes per axis.
+    pub nodes_per_axis: usize,
+    /// Steps taken.
+    pub steps: u64,
+    /// One event per action.
+    pub events: Vec<Event>,
+    /// Probe force against depth.
+    pub force_depth: Vec<ProbeSample>,
+    /// Blow-ups detected (and recovered from).
+    pub blow_ups: Vec<String>,
+}
+
+fn check(name: &str, v: f64, positive: bool) -> anyhow::Result<()> {
+    if !v.is_finite() || v < 0.0 || (positive && v == 0.0) {
+        anyhow::bail!(
+            "script: {name} must be a {} finite number, got {}",
+            if positive { "positive" } else { "non-negative" },
+            crate::io::num(v)
+        );
+    }
+    Ok(())
+}
+
+/// A point must lie within one cube side of the cube: a coordinate typed in millimetres (or
+/// any runaway value) is refused by name rather than flinging the tissue.
+fn check_point(what: &str, p: &[f64; 3]) -> anyhow::Result<()> {
+    let l = crate::mechanics::grid::CUBE_SIDE_M;
+    for (c, v) in p.iter().enumerate() {
+        if !v.is_finite() {
+            anyhow::bail!("script: {what}[{c}] is not finite");
+        }
+        if !(-l..=2.0 * l).contains(v) {
+            anyhow::bail!(
+                "script: {what} = {p:?} lies outside the cube's neighbourhood: coordinates are metres, the cube spans \
+                 0 to {l} m, and points must lie within {l} m of it"
+            );
+        }
+    }
+    Ok(())
+}
+
+impl Outcome {
+    /// Checks that every number of the outcome is finite (before it is written).
+    pub fn check_finite(&self) -> anyhow::Result<()> {
+        for e in &self.events {
+            let pos = e.positions.iter().flatten().flatten();
+            if !(e.tool_force_n.iter().chain(pos).all(|v| v.is_finite()) && e.max_displacement_m.is_finite()) {
+                anyhow::bail!("script: action {} ended in a non-finite state", e.action);
+            }
+        }
+        if self.force_depth.iter().any(|s| !s.force_n.is_finite()) {
+            anyhow::bail!("script: a probe force is not finite");
+        }
+        Ok(())
+    }
+}
+
+/// Runs a script.
+pub fn run(script: &Script) -> anyhow::Result<Outcome> {
+    let grid = Grid::paper();
+    let material = Material::preset(&script.object)
+        .ok_or_else(|| anyhow::anyhow!("script: object must be A or B, got {:?}", script.object))?;
+    check_bounds(script)?;
+    if script.damping_ratio.is_some() && !script.model.takes_damping_ratio() {
+        anyhow::bail!(
+            "script: \"damping_ratio\" is not for the axis lattice: {}",
+            crate::response::modal::AXIS_HAS_NO_MODES
+        );
+    }
+    let zeta = script.damping_ratio.unwrap_or(crate::response::damping::DEFAULT_DAMPING_RATIO);
+    let tissue = script.model.build(&material, None, zeta).map_err(|e| anyhow::anyhow!("script: {e:#}"))?;
+    let integrator = choose_integrator(script.integrator, script.dt, tissue.explicit_dt_limit()).map_err(|why| {
+        anyhow::anyhow!("script: {why}; lower dt, or choose \"integrator\": \"prefactored\" (or leave it out)")
+    })?;
+    let case = clamp_case(&grid, &material.name, &script.clamp)?;
+    let mut sim = Simulation::with_tissue(tissue, integrator, script.dt, case.as_ref());
+    let rest = grid.positions();
+    let mut out = Outcome {
+        object: material.name.clone(),
+        model: script.model,
+        integrator,
+        dt: script.dt,
+        nodes_per_axis: grid.n(),
+        steps: 0,
+        events: Vec::new(),
+        force_depth: Vec::new(),
+        blow_ups: Vec::new(),
+    };
+    let last = script.actions.len().saturating_sub(1);
+    for (i, action) in script.actions.iter().enumerate() {
+        let kind = run_action(script.dt, i, action, &mut sim, &mut out)?;
+        let x = sim.tissue.x();
+        let position = |p: usize| -> [f64; 3] { std::array::from_fn(|c| x[c][p]) };
+        let max_displacement_m = rest
+            .iter()
+            .enumerate()
+            .map(|(p, r)| {
+                let x = position(p);
+                ((x[0] - r[0]).powi(2) + (x[1] - r[1]).powi(2) + (x[2] - r[2]).powi(2)).sqrt()
+            })
+            .fold(0.0, f64::max);
+        let positions = (action.record() || i == last).then(|| (0..grid.num_nodes()).map(position).collect());
+        out.events.push(Event {
+            action: i,
+            kind: kind.into(),
+            time_s: sim.time_s,
+            tool_force_n: sim.tool_force,
+            max_displacement_m,
+            positions,
+        });
+    }
+    Ok(out)
+}
+
+/// Steps of an action lasting `d` seconds at `dt`.
+fn steps_for(d: f64, dt: f64) -> anyhow::Result<u64> {
+    check("duration_s", d, false)?;
+    if d > 100.0 {
+        anyhow::bail!("script: duration_s = {d} s is too long (at most 100 s)");
+    }
+    let steps = (d / dt).round();
+    if steps > 1e7 {
+        anyhow::bail!("script: duration_s = {d} s at dt = {dt} s is more than 1e7 steps");
+    }
+    Ok(steps as u64)
+}
+
+/// The bounds on the whole script, checked before any work.
+fn check_bounds(script: &Script) -> anyhow::Result<()> {
+    check("dt", script.dt, true)?;
+    if !(1e-6..=0.05).contains(&script.dt) {
+        anyhow::bail!("script: dt = {} s is out of range (1e-6 to 0.05 s)", script.dt);
+    }
+    if script.actions.len() > MAX_ACTIONS {
+        anyhow::bail!("script: {} actions, above the bound of {MAX_ACTIONS}", script.actions.len());
+    }
+    let recorded = script.actions.iter().filter(|a| a.record()).count() + 1;
+    if recorded > MAX_RECORDED {
+        anyhow::bail!("script: {recorded} actions record positions, above the bound of {MAX_RECORDED}");
+    }
+    let mut total_steps = 0u64;
+    let mut total_samples = 0usize;
+    for (i, a) in script.actions.iter().enumerate() {
+        let n = steps_for(a.duration_s(), script.dt).map_err(|e| anyhow::anyhow!("action {i}: {e}"))?;
+        total_steps += match a {
+            Action::Release { .. } => 0,
+            Action::Wait { .. } => n,
+            _ => n.max(1),
+        };
+        if let Action::Probe { samples, .. } = a {
+            total_samples += (*samples).clamp(1, 10_000);
+        }
+    }
+    if total_steps > MAX_TOTAL_STEPS {
+        anyhow::bail!(
+            "script: {total_steps} steps in all (at dt = {} s), above the bound of {MAX_TOTAL_STEPS} steps per script",
+            script.dt
+        );
+    }
+    if total_samples > MAX_SAMPLES {
+        anyhow::bail!("script: {total_samples} probe samples in all, above the bound of {MAX_SAMPLES}");
+    }
+    Ok(())
+}
+
+/// The fixed nodes and loads a script's `clamp` names.
+fn clamp_case(grid: &Grid, object: &str, clamp: &str) -> anyhow::Result<Option<LoadCase>> {
+    Ok(match clamp {
+        "none" => None,
+        "bottom" => Some(LoadCase::bottom_clamp(grid, object)),
+        id => {
+            let case = parse_case_id(grid, id).map_err(|e| anyhow::anyhow!("script: clamp: {e}"))?.1;
+            if case.bc != crate::mechanics::cases::Bc::Clamped {
+                anyhow::bail!(
+                    "script: clamp: {id} is a patch case; its roller supports hold single components, which the \
+                     mass-spring model does not represent (use a clamped case)"
+                );
+            }
+            Some(case)
+        }
+    })
+}
+
+/// Runs action `i`; returns its kind.
+fn run_action(
+    dt: f64,
+    i: usize,
+    action: &Action,
+    sim: &mut Simulation,
+    out: &mut Outcome,
+) -> anyhow::Result<&'static str> {
+    match action {
+        Action::Drag { node, to, duration_s, .. } => {
+            let nodes = sim.tissue.grid().num_nodes();
+            if *node >= nodes {
+                anyhow::bail!("script: action {i}: node {node} does not exist (0..{nodes})");
+            }
+            check_point(&format!("action {i}: drag target \"to\""), to)?;
+            let from: [f64; 3] = std::array::from_fn(|c| sim.tissue.x()[c][*node]);
+            let n = steps_for(*duration_s, dt)?.max(1);
+            for s in 1..=n {
+                let f = s as f64 / n as f64;
+                sim.tool = Tool::Drag { node: *node, target: std::array::from_fn(|c| from[c] + f * (to[c] - from[c])) };
+                step(sim, out)?;
+            }
+            Ok("drag")
+        }
+        Action::Probe { at, direction, radius, depth, duration_s, samples, .. } => {
+            probe(dt, i, (*at, *direction, *radius, *depth), *duration_s, *samples, sim, out)?;
+            Ok("probe")
+        }
+        Action::Release { .. } => {
+            sim.tool = Tool::None;
+            sim.tool_force = [0.0; 3];
+            Ok("release")
+        }
+        Action::Wait { duration_s, .. } => {
+            for _ in 0..steps_for(*duration_s, dt)? {
+                step(sim, out)?;
+            }
+            Ok("wait")
+        }
+    }
+}
+
+/// A probe action: `(at, direction, radius, depth)` in metres.
+fn probe(
+    dt: f64,
+    i: usize,
+    (at, direction, radius, depth): ([f64; 3], [f64; 3], f64, f64),
+    duration_s: f64,
+    samples: usize,
+    sim: &mut Simulation,
+    out: &mut Outcome,
+) -> anyhow::Result<()> {
+    check("radius", radius, true)?;
+    check("depth", depth, false)?;
+    let l = crate::mechanics::grid::CUBE_SIDE_M;
+    if radius > l || depth > l {
+        anyhow::bail!(
+            "script: action {i}: probe radius {} m and depth {} m must each be at most the cube's side ({l} m); \
+             sizes are metres",
+            crate::io::num(radius),
+            crate::io::num(depth)
+        );
+    }
+    check_point(&format!("action {i}: probe point \"at\""), &at)?;
+    let len = direction.iter().map(|d| d * d).sum::<f64>().sqrt();
+    if !(len.is_finite() && len > 0.0) {
+        anyhow::bail!("script: action {i}: probe needs a finite, non-zero direction");
+    }
+    let dir = direction.map(|d| d / len);
+    let n = steps_for(duration_s, dt)?.max(1);
+    let samples = samples.clamp(1, 10_000) as u64;
+    for s in 1..=n {
+        let d = depth * s as f64 / n as f64;
+        let centre = std::array::from_fn(|c| at[c] - radius * dir[c] + d * dir[c]);
+        sim.tool = Tool::Probe { centre, radius };
+        step(sim, out)?;
+        if s * samples % n < samples {
+            let f = sim.tool_force;
+            let along = -(f[0] * dir[0] + f[1] * dir[1] + f[2] * dir[2]);
+            out.force_depth.push(ProbeSample { action: i, depth_m: d, force_n: along });
+        }
+    }
+    Ok(())
+}
+
+/// One step; a blow-up is listed, and one the guard gave up on stops the script.
+fn step(sim: &mut Simulation, out: &mut Outcome) -> anyhow::Result<()> {
+    out.steps += 1;
+    if let Err(b) = sim.step() {
+        if b.fatal {
+            anyhow::bail!("simulation stopped at t = {:.4} s: {}", b.time_s, b.message);
+        }
+        if out.blow_ups.len() >= MAX_BLOW_UPS {
+            anyhow::bail!(
+                "simulation stopped at t = {:.4} s: {MAX_BLOW_UPS} blow-ups in all; the last: {}",
+                b.time_s,
+                b.message
+            );
+        }
+        out.blow_ups.push(format!("t = {:.4} s: {}", b.time_s, b.message));
+    }
+    Ok(())
+}

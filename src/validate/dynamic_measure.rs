@@ -1,0 +1,400 @@
+//! A running model's dynamics, measured by time stepping through the same [`Tissue::step`] the
+//! viewer and `simulate` use:
+//!
+//! * **Period and decay of the fundamental:** the model is released at rest from the static
+//!   shape of its own fundamental (the shape under the load `M phi_1`, `phi_1` scaled to
+//!   [`RELEASE_AMPLITUDE_M`] at most) on the viewer's scene, and stepped for
+//!   [`RELEASE_PERIODS`] periods; the modal coordinate `q = phi_1^T M u` then obeys, for a linear
+//!   model, `q_{n+1} = trace q_n - det q_{n-1}` exactly, whose least-squares fit gives the
+//!   discrete eigenvalues and so the measured period and damping ratio
+//!   ([`crate::response::single_mode::from_recurrence`]). They are compared with the model's own damped
+//!   fundamental (integrator error) and with the FEM's (model error).
+//! * **Trajectory error:** each reference transient ([`crate::validate::dynamic_reference`]) run on the model
+//!   with the same load, the relative L2 in time of the loaded face's displacement; the probe tap
+//!   run in the viewer's simulation (its contact and force readout), the relative L2 of the
+//!   force on the probe.
+
+use crate::response::damping::Damping;
+use crate::response::modal::{ModalModel, Mode};
+use crate::validate::dynamic_reference::{self, ReferenceTransient, Trajectory, Transient};
+use crate::response::single_mode::{self, ModeMotion};
+use crate::mechanics::cases::LoadCase;
+use crate::mechanics::grid::Grid;
+use crate::mechanics::material::Material;
+use crate::mechanics::msm::{MsmModel, MsmParams};
+use crate::sim::{Integrator, ModelChoice, Tissue};
+
+/// Largest displacement of the release shape, m (small: every model is near linear).
+pub const RELEASE_AMPLITUDE_M: f64 = 5e-4;
+/// Periods of the fundamental stepped in the release.
+pub const RELEASE_PERIODS: f64 = 4.0;
+/// Fewest steps of a release.
+const MIN_RELEASE_STEPS: usize = 40;
+/// Most steps of one run (a tiny explicit step on a stiff model).
+pub const MAX_STEPS: usize = 400_000;
+
+/// The FEM's dynamic reference of one object on the viewer's scene.
+#[derive(Debug, Clone)]
+pub struct References {
+    /// Object label.
+    pub object: String,
+    /// The material.
+    pub material: Material,
+    /// The damping ratio of every transient.
+    pub zeta: f64,
+    /// The scene (clamp and load).
+    pub scene: LoadCase,
+    /// The FEM's fundamental on the scene, rad/s.
+    pub fem_omega_1: f64,
+    /// The FEM's lowest [`MODES`] natural frequencies on the scene, Hz (lumped masses).
+    pub fem_modes_hz: Vec<f64>,
+    /// The converged transients.
+    pub transients: Vec<ReferenceTransient>,
+}
+
+impl References {
+    /// The FEM's fundamental and converged transients of `material` on the viewer's 8^3 scene,
+    /// damped by `zeta`.
+    pub fn new(material: &Material, zeta: f64) -> anyhow::Result<Self> {
+        Self::with_scene(material, zeta, dynamic_reference::view_scene(&Grid::paper()))
+    }
+
+    /// The same on another 8^3 `scene` (a clamp and a load, e.g. [`dynamic_reference::paper_scene`]):
+    /// its step load and release (the probe tap belongs to the viewer's scene only), and its
+    /// modes; the damping ratio stays set at the viewer scene's fundamental.
+    pub fn with_scene(material: &Material, zeta: f64, scene: LoadCase) -> anyhow::Result<Self> {
+        let grid = Grid::paper();
+        if scene.load.len() != 3 * grid.num_nodes() {
+            anyhow::bail!("scene {} is not on the viewer's {}^3 grid", scene.id, grid.n());
+        }
+        let fem = ModalModel::fem(&crate::mechanics::fem::FemModel::new(grid, material), material.density);
+        let fem_modes_hz = hz(&fem.modes(&scene.fixed, MODES)?);
+        let fem_omega_1 = crate::response::modal::scene_fundamental(&fem).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let is_view = scene.fixed == crate::response::linear::scene_fixed_dofs(&grid);
+        let transients = Transient::ALL
+            .iter()
+            .filter(|&&t| is_view || t != Transient::ProbeTap)
+            .map(|&t| dynamic_reference::converged(material, grid, &scene, zeta, t))
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        Ok(Self {
+            object: material.name.clone(),
+            material: material.clone(),
+            zeta,
+            scene,
+            fem_omega_1,
+            fem_modes_hz,
+            transients,
+        })
+    }
+}
+
+/// How many of the lowest modes a report lists.
+pub const MODES: usize = 6;
+
+fn hz(modes: &[Mode]) -> Vec<f64> {
+    modes.iter().map(|m| m.omega / (2.0 * std::f64::consts::PI)).collect()
+}
+
+/// One model, integrator and step, measured (`tissue-sim dynamics --json`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct DynamicReport {
+    /// Object label.
+    pub object: String,
+    /// The model (`hex`, `shear`, `fem-linear`, `fem-corotational`).
+    pub model: String,
+    /// `symplectic`, `implicit` or `prefactored`.
+    pub integrator: String,
+    /// Time step, s.
+    pub dt_s: f64,
+    /// The damping ratio set at the fundamental (mass-proportional).
+    pub damping_ratio_set: f64,
+    /// The model's own damped fundamental period `2 pi / (omega_1 sqrt(1 - zeta^2))`, from its
+    /// eigenvalues (`omega_1`: rest stiffness, lumped masses, the viewer's scene), s.
+    pub modal_period_s: f64,
+    /// The same for the FEM on the same mesh and scene, s.
+    pub fem_period_s: f64,
+    /// Period measured by time stepping (release from the fundamental's static shape), s.
+    pub measured_period_s: f64,
+    /// Damping ratio measured by time stepping.
+    pub measured_damping_ratio: f64,
+    /// The worst relative L2 error in time of the loaded face's displacement against the FEM's
+    /// reference transients (the step load and the release, [`DynamicReport::transients`]) over
+    /// their first 0.2 s.
+    pub trajectory_error: f64,
+    /// The relative L2 error in time of the force on the probe in the 20 ms tap, run in the
+    /// viewer's simulation (its contact and force readout), against the FEM's converged tap.
+    pub probe_tap_error: f64,
+    /// `|measured / modal period - 1|`: the integrator's period error.
+    pub period_error: f64,
+    /// `|measured - set damping ratio|`, in units of critical: the integrator's damping error.
+    pub damping_error: f64,
+    /// `|measured / FEM period - 1|`: model and integrator together against the FEM.
+    pub fem_period_error: f64,
+    /// What the integrator's closed form predicts at the model's fundamental (single mode).
+    pub predicted: Option<ModeMotion>,
+    /// Relative residual of the two-term recurrence fit to the released motion (0 for a pure
+    /// linear mode).
+    pub fit_residual: f64,
+    /// The model's undamped fundamental period `2 pi / omega_1`, s.
+    pub modal_undamped_period_s: f64,
+    /// The scene (`view_top_shear_x`, or a paper case id): its clamp and load give the modes and
+    /// the trajectories; the period and damping are measured on the viewer's scene, where the
+    /// ratio is set.
+    pub scene: String,
+    /// The model's lowest [`MODES`] natural frequencies on the scene's clamp, Hz (lumped masses).
+    pub modes_hz: Vec<f64>,
+    /// The FEM's, Hz.
+    pub fem_modes_hz: Vec<f64>,
+    /// Each transient's trajectory error.
+    pub transients: Vec<TransientError>,
+}
+
+/// The trajectory error of one transient.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TransientError {
+    /// `step_load`, `release` or `probe_tap`.
+    pub transient: Transient,
+    /// Relative L2 in time of the loaded face's displacement (of the probe force for the tap);
+    /// infinite when the blow-up guard stopped the run.
+    pub error: f64,
+    /// The reference's converged Newmark step, s.
+    pub reference_step_s: f64,
+}
+
+/// What to measure.
+#[derive(Debug, Clone, Copy)]
+pub struct Configuration {
+    /// The model.
+    pub model: ModelChoice,
+    /// Lattice parameters (the shipped tissue where `None`).
+    pub params: Option<MsmParams>,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Time step, s.
+    pub dt: f64,
+}
+
+/// The model's rest stiffness and masses.
+pub fn modal_model(material: &Material, model: ModelChoice, params: Option<MsmParams>) -> anyhow::Result<ModalModel> {
+    let grid = Grid::paper();
+    match model {
+        ModelChoice::Lattice(t) => {
+            let p = match params {
+                Some(p) => p,
+                None => crate::sim::shipped::tissue_params(material, t)?,
+            };
+            ModalModel::lattice(&MsmModel::new(grid, p, material.density)?).map_err(|e| anyhow::anyhow!("{e}"))
+        }
+        ModelChoice::Fem(_) => Ok(ModalModel::fem(&crate::mechanics::fem::FemModel::new(grid, material), material.density)),
+    }
+}
+
+/// Measures `config` against `refs` (its object and damping ratio).
+pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<DynamicReport> {
+    if !config.model.takes_damping_ratio() {
+        anyhow::bail!("{}", crate::response::modal::AXIS_HAS_NO_MODES);
+    }
+    let material = &refs.material;
+    let zeta = refs.zeta;
+    let modal = modal_model(material, config.model, config.params)?;
+    let fixed = crate::response::linear::scene_fixed_dofs(&Grid::paper());
+    let mode = modal.fundamental(&fixed)?;
+    let modes = modal.modes(&refs.scene.fixed, MODES)?;
+    let mut tissue = config.model.build(material, config.params, zeta)?;
+    let Damping::Ratio { omega_1, .. } = tissue.damping() else {
+        anyhow::bail!("the model is not damped by a ratio");
+    };
+    let (motion, fit_residual) = release(tissue.as_mut(), &modal, &mode, config)?;
+    let damped = |w: f64| single_mode::exact(w, 2.0 * zeta * w).period_s;
+    let modal_period_s = damped(omega_1);
+    let fem_period_s = damped(refs.fem_omega_1);
+    let mut transients = Vec::new();
+    for r in &refs.transients {
+        let run = match r.transient {
+            Transient::ProbeTap => tap(material, zeta, config)?,
+            t => Some(trajectory(tissue.as_mut(), &modal, &refs.scene, t, config)?),
+        };
+        // A run the blow-up guard had to stop has no trajectory: an infinite error.
+        let error = run.map_or(f64::INFINITY, |run| run.relative_error(&r.trajectory));
+        transients.push(TransientError { transient: r.transient, error, reference_step_s: r.trajectory.dt });
+    }
+    let worst = |tap: bool| {
+        transients
+            .iter()
+            .filter(|t| (t.transient == Transient::ProbeTap) == tap)
+            .map(|t| t.error)
+            .fold(0.0, |a: f64, b| if b.is_nan() { b } else { a.max(b) })
+    };
+    let (trajectory_error, probe_tap_error) = (worst(false), worst(true));
+    Ok(DynamicReport {
+        object: refs.object.clone(),
+        model: config.model.name(),
+        integrator: config.integrator.name().into(),
+        dt_s: config.dt,
+        damping_ratio_set: zeta,
+        modal_period_s,
+        fem_period_s,
+        measured_period_s: motion.period_s,
+        measured_damping_ratio: motion.damping_ratio,
+        trajectory_error,
+        probe_tap_error,
+        period_error: single_mode::period_error(motion.period_s, modal_period_s),
+        damping_error: (motion.damping_ratio - zeta).abs(),
+        fem_period_error: single_mode::period_error(motion.period_s, fem_period_s),
+        predicted: single_mode::discrete(config.integrator.scheme(), omega_1, 2.0 * zeta * omega_1, config.dt),
+        fit_residual,
+        modal_undamped_period_s: 2.0 * std::f64::consts::PI / omega_1,
+        scene: refs.scene.id.clone(),
+        modes_hz: hz(&modes),
+        fem_modes_hz: refs.fem_modes_hz.clone(),
+        transients,
+    })
+}
+
+fn steps_for(duration: f64, dt: f64) -> anyhow::Result<usize> {
+    let n = (duration / dt).round();
+    if !(n.is_finite() && n <= MAX_STEPS as f64) {
+        anyhow::bail!("{duration} s at dt = {dt} s is more than {MAX_STEPS} steps");
+    }
+    Ok(n.max(1.0) as usize)
+}
+
+/// Puts the tissue at rest at `rest + u` with `case`'s clamp and loads.
+fn start(tissue: &mut dyn Tissue, case: &LoadCase, u: &[f64]) {
+    tissue.apply_case(case);
+    let grid = tissue.grid();
+    let (x, v) = tissue.x_v_mut();
+    for p in 0..grid.num_nodes() {
+        let r = grid.position(p);
+        for c in 0..3 {
+            x[c][p] = r[c] + u[3 * p + c];
+            v[c][p] = 0.0;
+        }
+    }
+}
+
+fn step(tissue: &mut dyn Tissue, config: Configuration) -> anyhow::Result<()> {
+    tissue.step(config.integrator, config.dt).map_err(|e| anyhow::anyhow!("{e}"))
+}
+
+/// The release of the fundamental: its measured motion and the recurrence fit's residual.
+fn release(
+    tissue: &mut dyn Tissue,
+    modal: &ModalModel,
+    mode: &Mode,
+    config: Configuration,
+) -> anyhow::Result<(ModeMotion, f64)> {
+    let grid = tissue.grid();
+    let clamp = LoadCase::bottom_clamp(&grid, "view");
+    let peak = mode.shape.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    let scale = RELEASE_AMPLITUDE_M / peak;
+    let u: Vec<f64> = mode.shape.iter().map(|s| s * scale).collect();
+    start(tissue, &clamp, &u);
+    let mass = modal.dof_masses(&clamp.fixed);
+    let weights: Vec<f64> = mode.shape.iter().zip(&mass).map(|(s, m)| s * m / scale).collect();
+    let period = 2.0 * std::f64::consts::PI / mode.omega;
+    let steps = steps_for(RELEASE_PERIODS * period, config.dt)?.max(MIN_RELEASE_STEPS);
+    let coordinate = |t: &dyn Tissue| -> f64 {
+        let x = t.x();
+        (0..grid.num_nodes())
+            .map(|p| {
+                let r = grid.position(p);
+                (0..3).map(|c| weights[3 * p + c] * (x[c][p] - r[c])).sum::<f64>()
+            })
+            .sum()
+    };
+    let mut q = Vec::with_capacity(steps + 1);
+    q.push(coordinate(tissue));
+    for _ in 0..steps {
+        step(tissue, config)?;
+        q.push(coordinate(tissue));
+    }
+    Ok(fit_recurrence(&q, config.dt))
+}
+
+/// The viewer's probe tap ([`dynamic_reference::tap_centre`]) on the model in the viewer's simulation
+/// (its contact, its force readout): the magnitude of the force on the probe at every step, or
+/// `None` when the blow-up guard stopped it.
+fn tap(material: &Material, zeta: f64, config: Configuration) -> anyhow::Result<Option<Trajectory>> {
+    let tissue = config.model.build(material, config.params, zeta)?;
+    let grid = tissue.grid();
+    let clamp = LoadCase::bottom_clamp(&grid, "view");
+    let mut sim = crate::sim::Simulation::with_tissue(tissue, config.integrator, config.dt, Some(&clamp));
+    let steps = steps_for(dynamic_reference::DURATION_S, config.dt)?;
+    let mut samples = Vec::with_capacity(steps + 1);
+    samples.push(vec![0.0]);
+    // Once the probe has let go nothing pushes on it: zero force from then on.
+    let stepped = steps_for(dynamic_reference::TAP_DURATION_S, config.dt)?.saturating_add(1).min(steps);
+    for k in 1..=stepped {
+        sim.tool = match dynamic_reference::tap_centre(&grid, k as f64 * config.dt) {
+            Some(centre) => crate::sim::Tool::Probe { centre, radius: crate::validate::touch::PROBE_RADIUS_M },
+            None => crate::sim::Tool::None,
+        };
+        if sim.step().is_err() {
+            return Ok(None);
+        }
+        samples.push(vec![sim.tool_force.iter().map(|c| c * c).sum::<f64>().sqrt()]);
+    }
+    samples.resize(steps + 1, vec![0.0]);
+    Ok(Some(Trajectory { dt: config.dt, samples }))
+}
+
+/// Least-squares fit of `q_{n+1} = a q_n - b q_{n-1}`: the motion of `(a, b)` (NaN when it has
+/// none: unstable or not oscillating in a continuous way) and the relative residual.
+pub fn fit_recurrence(q: &[f64], dt: f64) -> (ModeMotion, f64) {
+    let (mut s11, mut s12, mut s22, mut r1, mut r2, mut yy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for w in q.windows(3) {
+        let (x1, x2, y) = (w[1], -w[0], w[2]);
+        s11 += x1 * x1;
+        s12 += x1 * x2;
+        s22 += x2 * x2;
+        r1 += x1 * y;
+        r2 += x2 * y;
+        yy += y * y;
+    }
+    let det = s11 * s22 - s12 * s12;
+    let nan = ModeMotion { period_s: f64::NAN, damping_ratio: f64::NAN };
+    if !(det.is_finite() && det > 0.0) {
+        return (nan, f64::NAN);
+    }
+    let a = (r1 * s22 - r2 * s12) / det;
+    let b = (s11 * r2 - s12 * r1) / det;
+    let res: f64 = q.windows(3).map(|w| (w[2] - a * w[1] + b * w[0]).powi(2)).sum();
+    let motion = single_mode::from_recurrence(a, b, dt).unwrap_or(nan);
+    (motion, (res / yy).sqrt())
+}
+
+/// The model's run of `transient` on `scene`: from rest with the load (step), or from its own
+/// static shape (rest stiffness) with the load removed (release), sampled on the loaded dofs.
+fn trajectory(
+    tissue: &mut dyn Tissue,
+    modal: &ModalModel,
+    scene: &LoadCase,
+    transient: Transient,
+    config: Configuration,
+) -> anyhow::Result<Trajectory> {
+    let dofs = dynamic_reference::loaded_dofs(scene);
+    let n = scene.load.len();
+    match transient {
+        Transient::StepLoad | Transient::ProbeTap => start(tissue, scene, &vec![0.0; n]),
+        Transient::Release => {
+            let u = modal.static_shape(scene)?;
+            let mut unloaded = scene.clone();
+            unloaded.load.fill(0.0);
+            start(tissue, &unloaded, &u);
+        }
+    }
+    let grid = tissue.grid();
+    let sample = |t: &dyn Tissue| -> Vec<f64> {
+        let x = t.x();
+        dofs.iter().map(|&d| x[d % 3][d / 3] - grid.position(d / 3)[d % 3]).collect()
+    };
+    let steps = steps_for(dynamic_reference::DURATION_S, config.dt)?;
+    let mut samples = Vec::with_capacity(steps + 1);
+    samples.push(sample(tissue));
+    for _ in 0..steps {
+        step(tissue, config)?;
+        samples.push(sample(tissue));
+    }
+    Ok(Trajectory { dt: config.dt, samples })
+}
