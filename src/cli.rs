@@ -774,28 +774,28 @@ fn validate_command(
     model: Option<&str>,
     json: bool,
 ) -> anyhow::Result<()> {
-    use crate::validate::touch_score::ModelUnderTest;
+    use crate::sim::Model;
     let grid = grid.grid()?;
     let (material, model) = match (params, model) {
         (Some(path), _) => {
             let (material, p) = errors_inputs(object, &ParamArgs::default(), Some(path))?;
-            (material, ModelUnderTest::Lattice(p))
+            (material, (Model::Lattice(p.topology()), Some(p)))
         }
         (None, Some(name)) => {
             let f = if name == "fem-linear" { Formulation::Linear } else { Formulation::Corotational };
-            (object.material(None)?, ModelUnderTest::Fem(f))
+            (object.material(None)?, (Model::Fem(f), None))
         }
         (None, None) => {
             let material = object.material(None)?;
             let p = crate::sim::shipped::default_params(&material)
                 .context("the default tissue: give --params FILE.json or --model fem-linear")?;
-            (material, ModelUnderTest::Lattice(p))
+            (material, (Model::Lattice(p.topology()), Some(p)))
         }
     };
     check_solver_size("validate", Bc::Clamped, grid.n())?;
     let reference = crate::validate::touch_score::Reference::new(&material, grid)?;
-    let mut report = crate::validate::touch_score::evaluate(&reference, &material, &model)
-        .with_context(|| format!("scoring {} of material {}", model.name(), material.name))?;
+    let mut report = crate::validate::touch_score::evaluate(&reference, &material, model.0, model.1)
+        .with_context(|| format!("scoring {} of material {}", model.0.name(), material.name))?;
     if let Some(label) = label {
         report.object = label;
     }
@@ -816,7 +816,7 @@ fn dynamics_command(
     scene: &str,
     json: bool,
 ) -> anyhow::Result<()> {
-    use crate::sim::ModelChoice;
+    use crate::sim::Model;
     if !(dt.is_finite() && (1e-6..=0.05).contains(&dt)) {
         anyhow::bail!("--dt {} is out of range: a time step from 1e-6 to 0.05 s", crate::io::num(dt));
     }
@@ -825,13 +825,13 @@ fn dynamics_command(
     let (material, choice, p) = match (params, model) {
         (Some(path), _) => {
             let (material, p) = errors_inputs(&object_args, &ParamArgs::default(), Some(path))?;
-            (material, ModelChoice::Lattice(p.topology()), Some(p))
+            (material, Model::Lattice(p.topology()), Some(p))
         }
         (None, name) => {
             let material = object_args.material(None)?;
             let choice = match name {
-                Some(n) => ModelChoice::try_from(n.to_owned()).map_err(|e| anyhow::anyhow!("{e}"))?,
-                None => ModelChoice::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY),
+                Some(n) => Model::try_from(n.to_owned()).map_err(|e| anyhow::anyhow!("{e}"))?,
+                None => Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY),
             };
             (material, choice, None)
         }
@@ -849,9 +849,7 @@ fn dynamics_command(
         crate::sim::DEFAULT_DYNAMIC_BUDGET,
     )
     .map_err(|e| anyhow::anyhow!("dynamics: {e}; lower --dt or choose --integrator prefactored"))?;
-    if matches!(choice, ModelChoice::Fem(_)) && integrator == crate::sim::Integrator::Implicit {
-        anyhow::bail!("dynamics: the FEM models step with symplectic or prefactored implicit Euler, not implicit");
-    }
+    choice.check_integrator(integrator).map_err(|e| anyhow::anyhow!("dynamics: {e}"))?;
     let grid = Grid::paper();
     let scene = match scene.strip_prefix("clamped-").and_then(|a| a.parse::<usize>().ok()) {
         Some(axis) => crate::validate::dynamic_reference::paper_scene(&grid, &material.name, axis),

@@ -92,8 +92,6 @@ pub struct Published {
     pub dt_limit: f64,
     /// How the running model is damped.
     pub damping: Option<crate::response::damping::Damping>,
-    /// The dynamic budget of the automatic choice.
-    pub budget: Option<crate::sim::DynamicBudget>,
     /// The running model's parameters.
     pub params: Option<MsmParams>,
     /// Whether anything moves (a tool is active or a node is not at rest): the UI redraws then.
@@ -184,7 +182,7 @@ impl PhysicsThread {
             }
             into.integrator = p.integrator;
             into.dt_limit = p.dt_limit;
-            (into.damping, into.budget) = (p.damping, p.budget);
+            into.damping = p.damping;
             into.params = p.params;
             into.moving = p.moving;
             into.tool_commands = p.tool_commands;
@@ -261,7 +259,6 @@ fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop,
         p.integrator = Some((sim.integrator, sim.dt));
         p.dt_limit = sim.dt_limit();
         p.damping = Some(sim.tissue.damping());
-        p.budget = Some(sim.budget);
         p.params = sim.tissue.params();
         p.moving = !state.paused && (sim.tool != Tool::None || sim.tissue.kinetic_energy() > 1e-12);
         p.tool_commands = state.tools;

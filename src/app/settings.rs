@@ -9,7 +9,7 @@ use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmParams, Topology};
 use crate::render::scene::ColourMode;
 use crate::sim::Integrator;
-use crate::sim::ModelChoice;
+use crate::sim::Model;
 
 /// What the left mouse button does on the 3D view.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -127,10 +127,10 @@ impl Shown {
     }
 
     /// The running model.
-    pub fn model(&self) -> ModelChoice {
+    pub fn model(&self) -> Model {
         match self.fem {
-            Some(f) => ModelChoice::Fem(f),
-            None => ModelChoice::Lattice(self.topology()),
+            Some(f) => Model::Fem(f),
+            None => Model::Lattice(self.topology()),
         }
     }
 }

@@ -20,7 +20,7 @@ use crate::mechanics::fem::FemModel;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmParams, Topology};
-use crate::sim::{Integrator, ModelChoice, Tool};
+use crate::sim::{Integrator, Model, Tool};
 use crate::sim::shipped::tissue_params;
 
 /// What the user asked for.
@@ -85,7 +85,7 @@ pub fn bottom_clamp(grid: &Grid) -> LoadCase {
 }
 
 /// The recipe of the running model for the physics thread: the lattice with `params`, or the FEM.
-fn recipe(model: ModelChoice, material: Material, params: MsmParams, zeta: f64) -> super::physics::TissueRecipe {
+fn recipe(model: Model, material: Material, params: MsmParams, zeta: f64) -> super::physics::TissueRecipe {
     Box::new(move || model.build(&material, Some(params), zeta).map_err(|e| format!("{e:#}")))
 }
 
@@ -277,7 +277,7 @@ impl ViewerState {
             move || wake(),
             move |ctx| {
                 let r = crate::validate::touch_score::Reference::new(&material, grid)
-                    .and_then(|reference| crate::validate::touch_score::evaluate(&reference, &material, &model))
+                    .and_then(|reference| crate::validate::touch_score::evaluate(&reference, &material, model.0, Some(model.1)))
                     .map(|r| crate::sim::shipped::RecordedScores {
                         worst_force_error: r.worst_force_error,
                         median_force_error: r.median_force_error,
@@ -306,11 +306,11 @@ impl ViewerState {
             "FEM probe force",
             move || wake(),
             move |ctx| {
-                let force = |m: crate::validate::touch_score::ModelUnderTest| -> anyhow::Result<f64> {
-                    let (mut r, _) = m.responder(&material, grid)?;
+                let force = |(m, p): (Model, MsmParams)| -> anyhow::Result<f64> {
+                    let (mut r, _) = crate::validate::touch_score::responder(m, Some(p), &material, grid)?;
                     Ok(r.solver.probe(&grid, centre, radius)?.force_n())
                 };
-                let fem = force(crate::validate::touch_score::ModelUnderTest::Fem(crate::mechanics::fem::dynamics::Formulation::Linear));
+                let fem = force((Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear), model.1));
                 let r = fem.map(|f| ProbeComparison {
                     centre,
                     fem_n: f,
@@ -324,12 +324,10 @@ impl ViewerState {
         }
     }
 
-    /// The running model as the touch benchmark scores it.
-    fn model_under_test(&self) -> crate::validate::touch_score::ModelUnderTest {
-        match self.shown.model() {
-            ModelChoice::Fem(f) => crate::validate::touch_score::ModelUnderTest::Fem(f),
-            ModelChoice::Lattice(_) => crate::validate::touch_score::ModelUnderTest::Lattice(self.shown.params),
-        }
+    /// The running model as the touch benchmark scores it: the model and the lattice's
+    /// parameters (unused by the FEM).
+    fn model_under_test(&self) -> (Model, MsmParams) {
+        (self.shown.model(), self.shown.params)
     }
 
     fn apply_case(&mut self, send: &mut dyn FnMut(Command)) {

@@ -4,7 +4,8 @@
 //! The FEM's state is interleaved (`3 node + component`); the simulation's is node-wise. The
 //! node-wise copy is the state between steps, and a step copies it in and out (no allocation).
 
-use super::{Integrator, Tissue};
+use super::integrator::Integrator;
+use super::tissue::Tissue;
 use crate::mechanics::cases::LoadCase;
 use crate::response::damping::Damping;
 use crate::mechanics::fem::FemModel;
@@ -133,9 +134,7 @@ impl Tissue for FemTissue {
         match integrator {
             Integrator::Symplectic => self.dynamics.step_symplectic(dt),
             Integrator::Prefactored => self.dynamics.step_prefactored(dt).map_err(|e| e.to_string())?,
-            Integrator::Implicit => {
-                return Err("the FEM models step with symplectic or prefactored implicit Euler, not implicit".into());
-            }
+            Integrator::Implicit => return check_integrator(integrator),
         }
         self.copy_out();
         Ok(())
@@ -183,5 +182,16 @@ impl Tissue for FemTissue {
     }
     fn damping(&self) -> Damping {
         self.damping
+    }
+}
+
+/// The FEM steps with symplectic or prefactored implicit Euler; a full-tangent implicit step is
+/// refused with this message.
+pub fn check_integrator(integrator: Integrator) -> Result<(), String> {
+    match integrator {
+        Integrator::Implicit => {
+            Err("the FEM models step with symplectic or prefactored implicit Euler, not implicit".into())
+        }
+        Integrator::Symplectic | Integrator::Prefactored => Ok(()),
     }
 }

@@ -1,17 +1,17 @@
 //! The seam between the interactive simulation and a tissue model: [`Tissue`] is what
-//! [`super::Simulation`] (tools, contact, blow-up guard), the physics thread and `simulate` need
-//! of a model, whatever it is. The mass-spring lattices implement it ([`MsmTissue`]); a FEM
-//! model plugs in by implementing it too, without touching the app.
+//! [`super::simulation::Simulation`] (tools, contact, blow-up guard), the physics thread and `simulate` need
+//! of a model, whatever it is. The mass-spring lattices ([`super::msm_tissue::MsmTissue`]) and the FEM
+//! ([`super::fem_tissue::FemTissue`]) implement it.
 //!
 //! State is node-wise in structure-of-arrays form: positions `x[c][p]`, velocities `v[c][p]`,
 //! external forces `f_ext[c][p]` (components `c = 0..3`, node `p`), and `free[p]` (1 for a free
 //! node, 0 for a fixed one). Steps must not allocate after their first call.
 
-use super::Integrator;
+use super::integrator::Integrator;
 use crate::mechanics::cases::LoadCase;
 use crate::response::damping::Damping;
 use crate::mechanics::grid::Grid;
-use crate::mechanics::msm::{Dynamics, MsmModel, MsmParams};
+use crate::mechanics::msm::MsmParams;
 
 /// A tissue model the interactive simulation can step.
 pub trait Tissue: Send + std::fmt::Debug {
@@ -53,151 +53,4 @@ pub trait Tissue: Send + std::fmt::Debug {
     fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String>;
     /// How the model is damped now.
     fn damping(&self) -> Damping;
-}
-
-/// The mass-proportional damping of `zeta` for `model` (a lattice), and the rate applied; its
-/// fundamental is solved unless `known` (the same model's).
-fn lattice_ratio_damping(model: &mut MsmModel, zeta: f64, known: Option<f64>) -> Result<Damping, String> {
-    let zeta = crate::response::damping::check_ratio(zeta)?;
-    let omega_1 = match known {
-        Some(w) => w,
-        None => crate::response::modal::scene_fundamental(&crate::response::modal::ModalModel::lattice(model)?)?,
-    };
-    let damping = Damping::Ratio { zeta, omega_1 };
-    model.set_mass_damping(damping.rate());
-    Ok(damping)
-}
-
-/// A mass-spring lattice as a [`Tissue`].
-#[derive(Debug)]
-pub struct MsmTissue {
-    /// The model.
-    pub model: MsmModel,
-    /// Its state.
-    pub dynamics: Dynamics,
-    density: f64,
-    dt_limit: f64,
-    /// The ratio asked for (kept across parameters; the axis lattice uses its nodal `d`).
-    ratio: Option<f64>,
-    damping: Damping,
-}
-
-impl MsmTissue {
-    /// `model` at rest (built for `density`, kg/m^3), damped by the parameters' nodal `d`.
-    pub fn new(model: MsmModel, density: f64) -> Self {
-        let dynamics = Dynamics::new(&model);
-        let dt_limit = explicit_dt_limit(&model);
-        let damping = Damping::Nodal(model.params.d);
-        Self { model, dynamics, density, dt_limit, ratio: None, damping }
-    }
-
-    /// The lattice of `params` on the paper's grid for a material of `density`.
-    pub fn build(params: MsmParams, density: f64) -> Result<Self, crate::mechanics::msm::ParamError> {
-        Ok(Self::new(MsmModel::new(Grid::paper(), params, density)?, density))
-    }
-}
-
-impl Tissue for MsmTissue {
-    fn grid(&self) -> Grid {
-        self.model.grid
-    }
-    fn total_mass(&self) -> f64 {
-        self.model.masses.iter().sum()
-    }
-    fn x(&self) -> &[Vec<f64>; 3] {
-        &self.dynamics.x
-    }
-    fn x_mut(&mut self) -> &mut [Vec<f64>; 3] {
-        &mut self.dynamics.x
-    }
-    fn v(&self) -> &[Vec<f64>; 3] {
-        &self.dynamics.v
-    }
-    fn v_mut(&mut self) -> &mut [Vec<f64>; 3] {
-        &mut self.dynamics.v
-    }
-    fn x_v_mut(&mut self) -> (&mut [Vec<f64>; 3], &mut [Vec<f64>; 3]) {
-        (&mut self.dynamics.x, &mut self.dynamics.v)
-    }
-    fn f_ext_mut(&mut self) -> &mut [Vec<f64>; 3] {
-        &mut self.dynamics.f_ext
-    }
-    fn free(&self) -> &[f64] {
-        &self.dynamics.free
-    }
-    fn forces(&mut self) -> &[Vec<f64>; 3] {
-        self.dynamics.forces(&self.model)
-    }
-    fn step(&mut self, integrator: Integrator, dt: f64) -> Result<(), String> {
-        match integrator {
-            Integrator::Symplectic => {
-                self.dynamics.step_symplectic(&self.model, dt);
-                Ok(())
-            }
-            Integrator::Implicit => self.dynamics.step_implicit(&self.model, dt).map_err(|e| e.to_string()),
-            Integrator::Prefactored => self.dynamics.step_prefactored(&self.model, dt).map_err(|e| e.to_string()),
-        }
-    }
-    fn kinetic_energy(&self) -> f64 {
-        self.dynamics.kinetic_energy(&self.model)
-    }
-    fn explicit_dt_limit(&self) -> f64 {
-        self.dt_limit
-    }
-    fn apply_case(&mut self, case: &LoadCase) {
-        self.dynamics.apply_case(case);
-    }
-    fn params(&self) -> Option<MsmParams> {
-        Some(self.model.params)
-    }
-    fn set_params(&mut self, params: MsmParams) -> Result<(), String> {
-        let mut model = MsmModel::new(self.model.grid, params, self.density).map_err(|e| e.to_string())?;
-        // The paper's axis lattice has no fundamental to set a ratio at: its nodal `d`.
-        let damping = match self.ratio {
-            Some(zeta) if params.topology() != crate::mechanics::msm::Topology::Axis => {
-                lattice_ratio_damping(&mut model, zeta, None)?
-            }
-            _ => Damping::Nodal(params.d),
-        };
-        self.model = model;
-        self.damping = damping;
-        self.dynamics.set_model(&self.model);
-        self.dt_limit = explicit_dt_limit(&self.model);
-        Ok(())
-    }
-    fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String> {
-        // The parameters are unchanged: the fundamental already solved is the model's.
-        self.damping = lattice_ratio_damping(&mut self.model, zeta, self.damping.omega_1())?;
-        self.ratio = Some(zeta);
-        self.dynamics.set_model(&self.model);
-        self.dt_limit = explicit_dt_limit(&self.model);
-        Ok(())
-    }
-    fn damping(&self) -> Damping {
-        self.damping
-    }
-}
-
-/// Estimated critical time step of symplectic Euler for a lattice, `2 / omega_max` from
-/// Gershgorin's bound `omega_max^2 <= max_i sum_j |K_ij| / m` on the rest stiffness
-/// (conservative, `m` each node's mass), narrowed by the damping to the smallest `2 m_p / c_p`.
-pub fn explicit_dt_limit(model: &MsmModel) -> f64 {
-    let mut row = vec![0.0f64; model.grid.num_nodes()];
-    for s in model.springs() {
-        let k = model.families[s.family].stiffness[s.a];
-        let d = model.families[s.family].family.offset.map(|o| f64::from(o.abs()));
-        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        // Row sums of k d d^T (and its off-diagonal copy) for the worst component.
-        let w = (0..3).map(|c| d[c] / len * (d[0] + d[1] + d[2]) / len).fold(0.0, f64::max);
-        row[s.a] += 2.0 * k * w;
-        row[s.b] += 2.0 * k * w;
-    }
-    let lambda = row.iter().zip(&model.masses).map(|(r, m)| r / m).fold(0.0, f64::max);
-    let damping_limit = model
-        .masses
-        .iter()
-        .zip(&model.damping)
-        .map(|(m, c)| if *c > 0.0 { 2.0 * m / c } else { f64::INFINITY })
-        .fold(f64::INFINITY, f64::min);
-    (2.0 / lambda.sqrt()).min(damping_limit)
 }

@@ -40,7 +40,7 @@ pub struct BenchReport {
 
 /// One 1 ms tick of `model` in the viewer's scene with the probe pressed 4 mm into the top face
 /// (after 0.2 s of settling), stepping `integrator` at `dt`.
-fn probe_tick(model: crate::sim::ModelChoice, integrator: crate::sim::Integrator, dt: f64) -> anyhow::Result<f64> {
+fn probe_tick(model: crate::sim::Model, integrator: crate::sim::Integrator, dt: f64) -> anyhow::Result<f64> {
     use crate::sim::{Simulation, Tool};
     let material = Material::object_a();
     let grid = Grid::paper();
@@ -181,15 +181,15 @@ pub fn run() -> anyhow::Result<BenchReport> {
     let mut viewer_tick_with_probe_s = BTreeMap::new();
     {
         use crate::mechanics::fem::dynamics::Formulation;
-        use crate::sim::{Integrator, ModelChoice};
+        use crate::sim::{Integrator, Model};
         for (model, integrator, dt) in [
-            (ModelChoice::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY), Integrator::Symplectic, 1e-4),
-            (ModelChoice::Fem(Formulation::Corotational), Integrator::Symplectic, 1e-4),
+            (Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY), Integrator::Symplectic, 1e-4),
+            (Model::Fem(Formulation::Corotational), Integrator::Symplectic, 1e-4),
             // The viewer's automatic choice for the FEM's 1 ms request (the dynamic budget).
-            (ModelChoice::Fem(Formulation::Corotational), Integrator::Symplectic, 2.5e-4),
-            (ModelChoice::Fem(Formulation::Linear), Integrator::Symplectic, 2.5e-4),
-            (ModelChoice::Fem(Formulation::Corotational), Integrator::Prefactored, 1e-3),
-            (ModelChoice::Fem(Formulation::Linear), Integrator::Prefactored, 1e-3),
+            (Model::Fem(Formulation::Corotational), Integrator::Symplectic, 2.5e-4),
+            (Model::Fem(Formulation::Linear), Integrator::Symplectic, 2.5e-4),
+            (Model::Fem(Formulation::Corotational), Integrator::Prefactored, 1e-3),
+            (Model::Fem(Formulation::Linear), Integrator::Prefactored, 1e-3),
         ] {
             let key = format!("{}/{}/{dt}", model.name(), integrator.name());
             viewer_tick_with_probe_s.insert(key, probe_tick(model, integrator, dt)?);

@@ -26,6 +26,7 @@ use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{Dynamics, MsmModel, MsmParams, Topology, statics};
 use crate::sim::shipped::tissue_params;
+use crate::sim::{Integrator, Model};
 
 /// Nodes per axis of the reference FEM.
 pub const REFERENCE_N: usize = 40;
@@ -39,110 +40,82 @@ pub const MAX_COUPLED_IMPLICIT_N: usize = 24;
 /// The length errors are expressed in (the paper's 8^3 spacing), metres.
 pub const ERROR_UNIT_M: f64 = CUBE_SIDE_M / 7.0;
 
-/// A model of the tissue; in files, its [`ModelKind::name`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ModelKind {
-    /// Mass-spring lattice of a topology.
-    Msm(Topology),
-    /// Finite elements.
-    Fem(Formulation),
-}
+/// The models charted: every one but the paper's axis lattice, whose only calibration is on the
+/// paper's cases (the chart's static cases) and which the touch benchmark cannot score (no shear
+/// stiffness at rest), so no held-out figure exists for it.
+pub const CHARTED: [Model; 4] = [
+    Model::Lattice(Topology::Shear),
+    Model::Lattice(Topology::Hex),
+    Model::Fem(Formulation::Linear),
+    Model::Fem(Formulation::Corotational),
+];
 
-impl ModelKind {
-    /// All models, cheapest first.
-    pub const ALL: [ModelKind; 5] = [
-        ModelKind::Msm(Topology::Axis),
-        ModelKind::Msm(Topology::Shear),
-        ModelKind::Msm(Topology::Hex),
-        ModelKind::Fem(Formulation::Linear),
-        ModelKind::Fem(Formulation::Corotational),
-    ];
+/// Every model in the chart's order, cheapest first (the panel's colours follow it).
+pub const CHART_ORDER: [Model; 5] = [
+    Model::Lattice(Topology::Axis),
+    Model::Lattice(Topology::Shear),
+    Model::Lattice(Topology::Hex),
+    Model::Fem(Formulation::Linear),
+    Model::Fem(Formulation::Corotational),
+];
 
-    /// The models charted: every one but the paper's axis lattice, whose only calibration is on
-    /// the paper's cases (the chart's static cases) and which the touch benchmark cannot score
-    /// (no shear stiffness at rest), so no held-out figure exists for it.
-    pub const CHARTED: [ModelKind; 4] = [
-        ModelKind::Msm(Topology::Shear),
-        ModelKind::Msm(Topology::Hex),
-        ModelKind::Fem(Formulation::Linear),
-        ModelKind::Fem(Formulation::Corotational),
-    ];
-
-    /// Name in the chart and the CSV, e.g. `msm-hex`.
-    pub fn name(self) -> String {
-        match self {
-            ModelKind::Msm(t) => format!("msm-{}", t.name()),
-            ModelKind::Fem(f) => format!("fem-{}", f.name()),
-        }
-    }
-
-    /// The model of a [`ModelKind::name`].
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|k| k.name() == name)
+/// The integrator of a chart point in the chart's files: `explicit` (symplectic Euler) or
+/// `implicit` (prefactored backward Euler).
+pub fn integrator_chart_name(integrator: Integrator) -> &'static str {
+    match integrator {
+        Integrator::Symplectic => "explicit",
+        Integrator::Implicit | Integrator::Prefactored => "implicit",
     }
 }
 
-impl std::fmt::Display for ModelKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.pad(&self.name())
-    }
-}
+/// A chart point's model and integrator as the chart's files write them ([`Model::chart_name`],
+/// [`integrator_chart_name`]).
+mod chart_names {
+    use serde::{Deserialize as _, Deserializer, Serializer, de::Error as _};
 
-/// Compares with a [`ModelKind::name`].
-impl serde::Serialize for ModelKind {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.serialize_str(&self.name())
-    }
-}
+    use crate::sim::{Integrator, Model};
 
-impl<'de> serde::Deserialize<'de> for ModelKind {
-    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        let name = <String as serde::Deserialize>::deserialize(deserializer)?;
-        Self::from_name(&name).ok_or_else(|| {
-            let known: Vec<String> = Self::ALL.iter().map(|k| k.name()).collect();
-            serde::de::Error::custom(format!("unknown model {name:?} (expected one of {})", known.join(", ")))
+    pub fn serialize_model<S: Serializer>(m: &Model, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&m.chart_name())
+    }
+
+    pub fn deserialize_model<'de, D: Deserializer<'de>>(d: D) -> Result<Model, D::Error> {
+        let name = String::deserialize(d)?;
+        Model::from_chart_name(&name).ok_or_else(|| {
+            let known: Vec<String> = Model::ALL.iter().map(|k| k.chart_name()).collect();
+            D::Error::custom(format!("unknown model {name:?} (expected one of {})", known.join(", ")))
         })
     }
-}
 
-/// How a chart point steps in time.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ChartIntegrator {
-    /// Symplectic Euler.
-    Explicit,
-    /// Prefactored backward Euler.
-    Implicit,
-}
+    pub fn serialize_integrator<S: Serializer>(i: &Integrator, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(super::integrator_chart_name(*i))
+    }
 
-impl ChartIntegrator {
-    /// The lower-case name used in the chart and the CSV.
-    pub fn name(self) -> &'static str {
-        match self {
-            ChartIntegrator::Explicit => "explicit",
-            ChartIntegrator::Implicit => "implicit",
+    pub fn deserialize_integrator<'de, D: Deserializer<'de>>(d: D) -> Result<Integrator, D::Error> {
+        match String::deserialize(d)?.as_str() {
+            "explicit" => Ok(Integrator::Symplectic),
+            "implicit" => Ok(Integrator::Prefactored),
+            other => Err(D::Error::custom(format!("unknown variant `{other}`, expected `explicit` or `implicit`"))),
         }
     }
 }
 
-impl std::fmt::Display for ChartIntegrator {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.pad(self.name())
-    }
-}
-
-/// Compares with a [`ChartIntegrator::name`].
 /// One point of the chart.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ChartPoint {
     /// Object label.
     pub object: String,
     /// The model (`msm-axis`, ..., `fem-corotational` in files).
-    pub model: ModelKind,
+    #[serde(serialize_with = "chart_names::serialize_model", deserialize_with = "chart_names::deserialize_model")]
+    pub model: Model,
     /// Nodes per axis.
     pub n: usize,
-    /// `explicit` (symplectic Euler) or `implicit` (prefactored backward Euler).
-    pub integrator: ChartIntegrator,
+    /// Symplectic Euler (`explicit` in files) or prefactored backward Euler (`implicit`).
+    #[serde(
+        serialize_with = "chart_names::serialize_integrator",
+        deserialize_with = "chart_names::deserialize_integrator"
+    )]
+    pub integrator: Integrator,
     /// Wall time of one step, s.
     pub step_s: f64,
     /// Largest stable explicit step ([`damped_explicit_limit`] of `omega_max` and the damping rate), s;
@@ -231,7 +204,7 @@ impl Default for ChartOptions {
 /// What the points of one model and resolution share.
 struct PointBase<'a> {
     object: &'a str,
-    model: ModelKind,
+    model: Model,
     n: usize,
     static_s: f64,
     avg: f64,
@@ -241,7 +214,7 @@ struct PointBase<'a> {
 
 /// How one point steps: its integrator, wall time per step, explicit limit, step and memory.
 struct Stepping {
-    integrator: ChartIntegrator,
+    integrator: Integrator,
     step_s: f64,
     dt_max_s: f64,
     dt_s: f64,
@@ -282,16 +255,15 @@ fn points_of(
     shared: &PointBase<'_>,
     explicit: (f64, f64, usize),
     implicit: Option<(f64, usize)>,
-    dynamics: Option<(&crate::validate::dynamic_measure::References, crate::sim::ModelChoice, Option<MsmParams>)>,
+    dynamics: Option<(&crate::validate::dynamic_measure::References, crate::sim::Model, Option<MsmParams>)>,
 ) -> anyhow::Result<Vec<ChartPoint>> {
     use crate::validate::dynamic_measure::{Configuration, measure};
-    use crate::sim::Integrator;
     let (step_s, dt_max_s, memory_bytes) = explicit;
     let mut steppings =
-        vec![Stepping { integrator: ChartIntegrator::Explicit, step_s, dt_max_s, dt_s: 0.9 * dt_max_s, memory_bytes }];
+        vec![Stepping { integrator: Integrator::Symplectic, step_s, dt_max_s, dt_s: 0.9 * dt_max_s, memory_bytes }];
     if let Some((step_s, memory_bytes)) = implicit {
         steppings.extend(IMPLICIT_STEPS_S.iter().map(|&dt_s| Stepping {
-            integrator: ChartIntegrator::Implicit,
+            integrator: Integrator::Prefactored,
             step_s,
             dt_max_s: f64::INFINITY,
             dt_s,
@@ -303,11 +275,7 @@ fn points_of(
         .map(|st| {
             let report = match dynamics {
                 Some((refs, model, params)) => {
-                    let integrator = match st.integrator {
-                        ChartIntegrator::Explicit => Integrator::Symplectic,
-                        ChartIntegrator::Implicit => Integrator::Prefactored,
-                    };
-                    Some(measure(refs, Configuration { model, params, integrator, dt: st.dt_s })?)
+                    Some(measure(refs, Configuration { model, params, integrator: st.integrator, dt: st.dt_s })?)
                 }
                 None => None,
             };
@@ -446,13 +414,13 @@ fn msm_points(
     let force = match touch {
         Some(reference) => {
             100.0
-                * crate::validate::touch_score::evaluate(reference, material, &crate::validate::touch_score::ModelUnderTest::Lattice(params))?
+                * crate::validate::touch_score::evaluate(reference, material, Model::Lattice(topology), Some(params))?
                     .worst_force_error
         }
         None => f64::NAN,
     };
-    let shared = PointBase { object, model: ModelKind::Msm(topology), n: grid.n(), static_s, avg, max, force };
-    let dynamics = dynamics.map(|r| (r, crate::sim::ModelChoice::Lattice(topology), Some(params)));
+    let shared = PointBase { object, model: Model::Lattice(topology), n: grid.n(), static_s, avg, max, force };
+    let dynamics = dynamics.map(|r| (r, crate::sim::Model::Lattice(topology), Some(params)));
     points_of(&shared, (explicit, dt_max, base), implicit, dynamics)
 }
 
@@ -496,8 +464,8 @@ fn fem_points(
     }
     // The touch reference is this FEM on this mesh: it scores itself exactly.
     let force = if touch.is_some() { 0.0 } else { f64::NAN };
-    let shared = PointBase { object, model: ModelKind::Fem(formulation), n: grid.n(), static_s, avg, max, force };
-    let dynamics = dynamics.map(|r| (r, crate::sim::ModelChoice::Fem(formulation), None));
+    let shared = PointBase { object, model: Model::Fem(formulation), n: grid.n(), static_s, avg, max, force };
+    let dynamics = dynamics.map(|r| (r, crate::sim::Model::Fem(formulation), None));
     points_of(&shared, (explicit, dt_max, without), implicit, dynamics)
 }
 
@@ -599,10 +567,10 @@ fn fmt_ms(s: f64) -> String {
 
 /// The mass-proportional rate of `kind` for `material`: the chart's damping ratio at the
 /// model's own 8^3 fundamental.
-fn damping_rate(material: &Material, kind: ModelKind) -> anyhow::Result<f64> {
+fn damping_rate(material: &Material, kind: Model) -> anyhow::Result<f64> {
     let choice = match kind {
-        ModelKind::Msm(t) => crate::sim::ModelChoice::Lattice(t),
-        ModelKind::Fem(f) => crate::sim::ModelChoice::Fem(f),
+        Model::Lattice(t) => crate::sim::Model::Lattice(t),
+        Model::Fem(f) => crate::sim::Model::Fem(f),
     };
     // The running tissue's own rate (its one home: `Tissue::set_damping_ratio`).
     Ok(choice.build(material, None, CHART_DAMPING_RATIO)?.damping().rate())
@@ -652,7 +620,7 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
             .map(|s| s.displacements)
             .collect();
         let reference = sampled(&ref_grid, &reference);
-        let alpha = |kind: ModelKind| damping_rate(&material, kind);
+        let alpha = |kind: Model| damping_rate(&material, kind);
         for &n in &opts.resolutions {
             let grid = Grid::new(n)?;
             let (touch, dynamics) = if n == Grid::paper().n() {
@@ -662,7 +630,7 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
             } else {
                 (None, None)
             };
-            for kind in ModelKind::CHARTED {
+            for kind in CHARTED {
                 if opts.cancel.as_ref().is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
                     anyhow::bail!("the chart was cancelled");
                 }
@@ -673,8 +641,8 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
                 ));
                 let refs = (&reference[..], touch.as_ref(), dynamics.as_ref());
                 let mut pts = match kind {
-                    ModelKind::Msm(t) => msm_points(object, &material, t, grid, opts, refs, alpha(kind)?)?,
-                    ModelKind::Fem(f) => fem_points(object, &material, f, grid, opts, refs, alpha(kind)?)?,
+                    Model::Lattice(t) => msm_points(object, &material, t, grid, opts, refs, alpha(kind)?)?,
+                    Model::Fem(f) => fem_points(object, &material, f, grid, opts, refs, alpha(kind)?)?,
                 };
                 points.append(&mut pts);
             }
@@ -717,12 +685,12 @@ mod tests {
 
     #[test]
     fn model_and_integrator_names_round_trip() {
-        for kind in ModelKind::ALL {
-            assert_eq!(ModelKind::from_name(&kind.name()), Some(kind));
-            assert_eq!(format!("{kind}"), kind.name());
+        for kind in Model::ALL {
+            assert_eq!(Model::from_chart_name(&kind.chart_name()), Some(kind));
+            assert_eq!(format!("{}", kind.chart_name()), kind.chart_name());
         }
-        assert_eq!(ModelKind::from_name("msm-other"), None);
-        assert_eq!(format!("{:<9}|", ChartIntegrator::Explicit), "explicit |");
+        assert_eq!(Model::from_chart_name("msm-other"), None);
+        assert_eq!(format!("{:<9}|", integrator_chart_name(Integrator::Symplectic)), "explicit |");
     }
 
     #[test]

@@ -153,9 +153,9 @@ pub fn choose(points: &[ChartPoint], object: &str, budget: &Budget) -> Choice {
         let _ = writeln!(
             s,
             "{:<18} {:>4} {:<9} {:>8.4} {:>8.2} {:>9.4} {:>9.4} {:>9.3} {:>9.3} {:>9} {:>11.2} {:>10.1}  {verdict}{mark}",
-            p.model,
+            p.model.chart_name(),
             p.n,
-            p.integrator,
+            crate::study::chart::integrator_chart_name(p.integrator),
             p.dt_s * 1e3,
             p.force_err_pct,
             p.avg_err_pct,
@@ -185,9 +185,9 @@ fn conclusion(s: &mut String, chosen: Option<&ChartPoint>, mine: &[&ChartPoint],
                  error {:.4} %, period error {:.3} %, damping error {:.3} % of critical, {:.2} us per tick ({} step(s) \
                  of {:.2} us; {:.0} % of the tick budget), {:.1} kB. It is the cheapest per tick of the {} points that \
                  meet both budgets.",
-                c.model,
+                c.model.chart_name(),
                 c.n,
-                c.integrator,
+                crate::study::chart::integrator_chart_name(c.integrator),
                 c.dt_s * 1e3,
                 c.force_err_pct,
                 budget.max_force_error_pct,
@@ -215,16 +215,19 @@ fn conclusion(s: &mut String, chosen: Option<&ChartPoint>, mine: &[&ChartPoint],
                     s,
                     " At {rate_hz} Hz the most accurate where the user touches is {} at {}^3 ({}): {:.2} % touch force \
                      error.",
-                    p.model, p.n, p.integrator, p.force_err_pct
+                    p.model.chart_name(),
+                    p.n,
+                    crate::study::chart::integrator_chart_name(p.integrator),
+                    p.force_err_pct
                 );
             }
             if let Some(p) = accurate {
                 let _ = write!(
                     s,
                     " Within the accuracy budget the cheapest is {} at {}^3 ({}): {:.1} us per tick against {:.1} us.",
-                    p.model,
+                    p.model.chart_name(),
                     p.n,
-                    p.integrator,
+                    crate::study::chart::integrator_chart_name(p.integrator),
                     p.tick_s(rate_hz) * 1e6,
                     budget_s * 1e6
                 );
@@ -239,17 +242,17 @@ mod tests {
     use super::*;
     use crate::mechanics::fem::dynamics::Formulation;
     use crate::mechanics::msm::Topology;
-    use crate::study::chart::{ChartIntegrator, ModelKind};
+    use crate::sim::{Integrator, Model};
 
     // Stand-ins for the four kinds of model the test needs.
-    const CHEAP_STIFF: ModelKind = ModelKind::Msm(Topology::Axis);
-    const IMPLICIT: ModelKind = ModelKind::Msm(Topology::Shear);
-    const COARSE: ModelKind = ModelKind::Msm(Topology::Hex);
-    const FINE: ModelKind = ModelKind::Fem(Formulation::Linear);
+    const CHEAP_STIFF: Model = Model::Lattice(Topology::Axis);
+    const IMPLICIT: Model = Model::Lattice(Topology::Shear);
+    const COARSE: Model = Model::Lattice(Topology::Hex);
+    const FINE: Model = Model::Fem(Formulation::Linear);
 
     fn point(
-        model: ModelKind,
-        integrator: ChartIntegrator,
+        model: Model,
+        integrator: Integrator,
         step_s: f64,
         dt_max_s: f64,
         max_err_pct: f64,
@@ -294,20 +297,20 @@ mod tests {
     fn picks_the_cheapest_tick_that_meets_both_budgets() {
         let points = vec![
             // 1 us per step but dt_max 0.1 ms: 12 substeps per 1 ms tick = 12 us.
-            point(CHEAP_STIFF, ChartIntegrator::Explicit, 1e-6, 1e-4, 1.0),
+            point(CHEAP_STIFF, Integrator::Symplectic, 1e-6, 1e-4, 1.0),
             // 5 us per step, one step per tick.
-            point(IMPLICIT, ChartIntegrator::Implicit, 5e-6, f64::INFINITY, 1.0),
+            point(IMPLICIT, Integrator::Prefactored, 5e-6, f64::INFINITY, 1.0),
             // Cheapest of all but too inaccurate.
-            point(COARSE, ChartIntegrator::Explicit, 1e-7, 1e-2, 3.0),
+            point(COARSE, Integrator::Symplectic, 1e-7, 1e-2, 3.0),
             // Accurate but too slow.
-            point(FINE, ChartIntegrator::Implicit, 2e-3, f64::INFINITY, 0.1),
+            point(FINE, Integrator::Prefactored, 2e-3, f64::INFINITY, 0.1),
         ];
         assert_eq!(points[0].substeps(1000.0), 12.0);
         let c = choose(&points, "A", &budget(6.0, 1000.0));
         assert_eq!(c.chosen.map(|p| p.model), Some(IMPLICIT), "{}", c.explanation);
         let c = choose(&points, "A", &budget(1.5, 1000.0));
         assert!(c.chosen.is_none());
-        assert!(c.explanation.contains(&format!("cheapest is {FINE}")), "{}", c.explanation);
+        assert!(c.explanation.contains(&format!("cheapest is {}", FINE.chart_name())), "{}", c.explanation);
         // At 10 Hz the fine model's 100 ms implicit step fits its tick.
         let mut points = points;
         points.push(ChartPoint { dt_s: 0.1, cost_per_sim_s: 2e-3 / 0.1, ..points[3].clone() });

@@ -19,7 +19,8 @@ use crate::mechanics::grid::Grid;
 use crate::io::OutputDir;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmModel, Topology};
-use chart::{ChartOptions, ChartPoint, ModelKind};
+use crate::sim::{Integrator, Model};
+use chart::{ChartOptions, ChartPoint};
 use stability::StabilityPoint;
 
 /// The stability study: measured against analytic critical dt across resolution (axis and hex
@@ -60,9 +61,9 @@ fn points_table(md: &mut String, points: &[ChartPoint]) {
             md,
             "| {} | {} | {} | {} | {:.4} | {:.2} | {:.4} | {:.2} | {:.4} | {:.4} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {} |",
             p.object,
-            p.model,
+            p.model.chart_name(),
             p.n,
-            p.integrator,
+            crate::study::chart::integrator_chart_name(p.integrator),
             p.dt_s * 1e3,
             p.step_s * 1e6,
             p.cost_per_sim_s,
@@ -86,7 +87,7 @@ fn dynamic_crossings(md: &mut String, points: &[ChartPoint]) {
         "## Where the dynamic error crosses 5 %\n\n| object | model | integrator | trajectory error | period error | \
          damping error (% of critical) |\n|---|---|---|---|---|---|"
     );
-    let mut keys: Vec<(String, ModelKind, chart::ChartIntegrator)> = Vec::new();
+    let mut keys: Vec<(String, Model, Integrator)> = Vec::new();
     for p in points.iter().filter(|p| p.dyn_err_pct.is_finite()) {
         let k = (p.object.clone(), p.model, p.integrator);
         if !keys.contains(&k) {
@@ -102,7 +103,9 @@ fn dynamic_crossings(md: &mut String, points: &[ChartPoint]) {
             .collect();
         let _ = writeln!(
             md,
-            "| {object} | {model} | {integrator} | {} | {} | {} |",
+            "| {object} | {} | {} | {} | {} | {} |",
+            model.chart_name(),
+            chart::integrator_chart_name(integrator),
             chart::crossing(&series, |p| p.dyn_err_pct, 5.0),
             chart::crossing(&series, |p| p.period_err_pct, 5.0),
             chart::crossing(&series, |p| p.damping_err_pct, 5.0)
@@ -191,8 +194,8 @@ pub fn write_chart(
     let stab = if with_stability { stability_study(progress)? } else { Vec::new() };
     let total_s = start.elapsed().as_secs_f64();
     files.add("chart.csv", csv_bytes(&points)?);
-    files.add("chart.svg", plot::speed_accuracy_svg(&points, &ModelKind::CHARTED, plot::Axis::Static)?);
-    files.add("chart_dynamic.svg", plot::speed_accuracy_svg(&points, &ModelKind::CHARTED, plot::Axis::Dynamic)?);
+    files.add("chart.svg", plot::speed_accuracy_svg(&points, &chart::CHARTED, plot::Axis::Static)?);
+    files.add("chart_dynamic.svg", plot::speed_accuracy_svg(&points, &chart::CHARTED, plot::Axis::Dynamic)?);
     if with_stability {
         files.add("stability.csv", csv_bytes(&stab)?);
         files.add("stability.svg", plot::stability_svg(&stab)?);

@@ -4,7 +4,8 @@
 
 use plotters::prelude::*;
 
-use super::chart::{ChartIntegrator, ChartPoint, ModelKind};
+use super::chart::ChartPoint;
+use crate::sim::{Integrator, Model};
 use super::stability::StabilityPoint;
 
 const COLOURS: [RGBColor; 5] = [
@@ -72,7 +73,7 @@ impl Axis {
 
 /// `axis`'s error (log) against wall time per simulated second (log), one panel per object:
 /// colour = model, circle = explicit, triangle = implicit, the Pareto front joined.
-pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[ModelKind], axis: Axis) -> anyhow::Result<String> {
+pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[Model], axis: Axis) -> anyhow::Result<String> {
     let points: Vec<ChartPoint> = points.iter().filter(|p| axis.of(p).is_finite()).cloned().collect();
     let points = &points[..];
     let (title, y_desc) = axis.describe();
@@ -118,7 +119,7 @@ pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[ModelKind], axis: Axi
                         let at = (p.cost_per_sim_s, axis.of(p));
                         let style = if axis.on_front(p) { colour.filled() } else { colour.stroke_width(2) };
                         let marker: DynElement<'_, SVGBackend<'_>, (f64, f64)> =
-                            if p.integrator == ChartIntegrator::Explicit {
+                            if p.integrator == Integrator::Symplectic {
                                 Circle::new(at, 5, style).into_dyn()
                             } else {
                                 TriangleMarker::new(at, 6, style).into_dyn()
@@ -126,13 +127,13 @@ pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[ModelKind], axis: Axi
                         marker
                     }))
                     .map_err(err)?
-                    .label(model.name())
+                    .label(model.chart_name())
                     .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
                 chart
                     .draw_series(of_model.iter().map(|p| {
                         let label = match (axis, p.integrator) {
-                            (Axis::Static, ChartIntegrator::Explicit) => format!("{}", p.n),
-                            (Axis::Static, ChartIntegrator::Implicit) => String::new(),
+                            (Axis::Static, Integrator::Symplectic) => format!("{}", p.n),
+                            (Axis::Static, Integrator::Prefactored | Integrator::Implicit) => String::new(),
                             (Axis::Dynamic, _) => format!("{:.2}", p.dt_s * 1e3),
                         };
                         Text::new(label, (p.cost_per_sim_s, axis.of(p)), ("sans-serif", 10).into_font())

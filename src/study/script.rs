@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 use crate::mechanics::cases::{LoadCase, parse_case_id};
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
-use crate::sim::{Integrator, ModelChoice, Simulation, Tool, choose_integrator};
+use crate::sim::{Integrator, Model, Simulation, Tool, choose_integrator};
 
 /// A script.
 #[derive(Debug, Clone, Deserialize)]
@@ -43,7 +43,7 @@ pub struct Script {
     pub object: String,
     /// `hex` (the default tissue), `shear`, `axis`, `fem-linear` or `fem-corotational`.
     #[serde(default = "default_model")]
-    pub model: ModelChoice,
+    pub model: Model,
     /// Time step, s (default 1e-4).
     #[serde(default = "default_dt")]
     pub dt: f64,
@@ -59,8 +59,8 @@ pub struct Script {
     pub actions: Vec<Action>,
 }
 
-fn default_model() -> ModelChoice {
-    ModelChoice::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY)
+fn default_model() -> Model {
+    Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY)
 }
 fn default_dt() -> f64 {
     1e-4
@@ -179,7 +179,7 @@ pub struct Outcome {
     /// Object label.
     pub object: String,
     /// Model.
-    pub model: ModelChoice,
+    pub model: Model,
     /// Integrator used.
     pub integrator: Integrator,
     /// Time step, s.

@@ -22,7 +22,7 @@ use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmModel, MsmParams};
-use crate::sim::{Integrator, ModelChoice, Tissue};
+use crate::sim::{Integrator, Model, Tissue};
 
 /// Largest displacement of the release shape, m (small: every model is near linear).
 pub const RELEASE_AMPLITUDE_M: f64 = 5e-4;
@@ -165,7 +165,7 @@ pub struct TransientError {
 #[derive(Debug, Clone, Copy)]
 pub struct Configuration {
     /// The model.
-    pub model: ModelChoice,
+    pub model: Model,
     /// Lattice parameters (the shipped tissue where `None`).
     pub params: Option<MsmParams>,
     /// Integrator.
@@ -175,17 +175,17 @@ pub struct Configuration {
 }
 
 /// The model's rest stiffness and masses.
-pub fn modal_model(material: &Material, model: ModelChoice, params: Option<MsmParams>) -> anyhow::Result<ModalModel> {
+pub fn modal_model(material: &Material, model: Model, params: Option<MsmParams>) -> anyhow::Result<ModalModel> {
     let grid = Grid::paper();
     match model {
-        ModelChoice::Lattice(t) => {
+        Model::Lattice(t) => {
             let p = match params {
                 Some(p) => p,
                 None => crate::sim::shipped::tissue_params(material, t)?,
             };
             ModalModel::lattice(&MsmModel::new(grid, p, material.density)?).map_err(|e| anyhow::anyhow!("{e}"))
         }
-        ModelChoice::Fem(_) => Ok(ModalModel::fem(&crate::mechanics::fem::FemModel::new(grid, material), material.density)),
+        Model::Fem(_) => Ok(ModalModel::fem(&crate::mechanics::fem::FemModel::new(grid, material), material.density)),
     }
 }
 

@@ -5,10 +5,10 @@ use crate::response::linear::{GroupedStiffness, SceneSolver, group_values, scene
 use crate::response::modes;
 use crate::validate::touch::{Kind, Load, MODES, PROBE_RADIUS_M, Set, TouchCase, touch_cases};
 use crate::mechanics::fem::FemModel;
-use crate::mechanics::fem::dynamics::Formulation;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmModel, MsmParams, Topology};
+use crate::sim::Model;
 
 /// A model's answer to one case.
 #[derive(Debug, Clone, PartialEq)]
@@ -112,44 +112,36 @@ impl Reference {
     }
 }
 
-/// A model the benchmark scores.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum ModelUnderTest {
-    /// A spring lattice with these parameters.
-    Lattice(MsmParams),
-    /// The hex8 FEM (its rest tangent: the corotational formulation's equals the linear one's).
-    Fem(Formulation),
-}
-
-impl ModelUnderTest {
-    /// The model's name: the lattice topology, or `fem-linear` / `fem-corotational`.
-    pub fn name(&self) -> String {
-        match self {
-            ModelUnderTest::Lattice(p) => p.topology().name().to_owned(),
-            ModelUnderTest::Fem(f) => format!("fem-{}", f.name()),
+/// The grouped stiffness, parameters and lumped masses on `grid` of `model` of `material`: a
+/// lattice with `params` (its shipped tissue when `None`), or the hex8 FEM (its rest tangent: the
+/// corotational formulation's equals the linear one's; `params` unused).
+pub fn responder(
+    model: Model,
+    params: Option<MsmParams>,
+    material: &Material,
+    grid: Grid,
+) -> anyhow::Result<(Responder, Vec<f64>)> {
+    match model {
+        Model::Lattice(topology) => {
+            let params = match params {
+                Some(p) => p,
+                None => crate::sim::shipped::tissue_params(material, topology)?,
+            };
+            if params.topology() == Topology::Axis {
+                anyhow::bail!(
+                    "the axis-spring lattice has no shear stiffness at rest: a sideways touch has no \
+                     small-displacement answer, so it cannot be scored on the touch benchmark"
+                );
+            }
+            let model = MsmModel::new(grid, params, material.density)?;
+            let fixed = scene_fixed_dofs(&grid);
+            let mass = fixed.iter().enumerate().map(|(d, &f)| if f { 0.0 } else { model.masses[d / 3] }).collect();
+            let stiffness = GroupedStiffness::lattice(grid, params.topology());
+            Ok((Responder::new(grid, stiffness, &group_values(&params))?, mass))
         }
-    }
-
-    /// Its grouped stiffness, parameters and lumped masses on `grid`.
-    pub fn responder(&self, material: &Material, grid: Grid) -> anyhow::Result<(Responder, Vec<f64>)> {
-        match self {
-            ModelUnderTest::Lattice(params) => {
-                if params.topology() == Topology::Axis {
-                    anyhow::bail!(
-                        "the axis-spring lattice has no shear stiffness at rest: a sideways touch has no \
-                         small-displacement answer, so it cannot be scored on the touch benchmark"
-                    );
-                }
-                let model = MsmModel::new(grid, *params, material.density)?;
-                let fixed = scene_fixed_dofs(&grid);
-                let mass = fixed.iter().enumerate().map(|(d, &f)| if f { 0.0 } else { model.masses[d / 3] }).collect();
-                let stiffness = GroupedStiffness::lattice(grid, params.topology());
-                Ok((Responder::new(grid, stiffness, &group_values(params))?, mass))
-            }
-            ModelUnderTest::Fem(_) => {
-                let fem = FemModel::new(grid, material);
-                Ok((Responder::new(grid, GroupedStiffness::fem(&fem), &[1.0])?, fem_masses(&grid, material.density)))
-            }
+        Model::Fem(_) => {
+            let fem = FemModel::new(grid, material);
+            Ok((Responder::new(grid, GroupedStiffness::fem(&fem), &[1.0])?, fem_masses(&grid, material.density)))
         }
     }
 }
@@ -201,10 +193,16 @@ pub struct Report {
     pub worst_frequency_error: f64,
 }
 
-/// Scores `model` of `material` against `reference`.
-pub fn evaluate(reference: &Reference, material: &Material, model: &ModelUnderTest) -> anyhow::Result<Report> {
+/// Scores `model` of `material` (a lattice with `params`, its shipped tissue when `None`)
+/// against `reference`.
+pub fn evaluate(
+    reference: &Reference,
+    material: &Material,
+    model: Model,
+    params: Option<MsmParams>,
+) -> anyhow::Result<Report> {
     let grid = reference.grid;
-    let (mut responder, mass) = model.responder(material, grid)?;
+    let (mut responder, mass) = responder(model, params, material, grid)?;
     let h = grid.h();
     let mut cases = Vec::with_capacity(reference.cases.len());
     for (case, fem) in reference.cases.iter().zip(&reference.answers) {
@@ -328,8 +326,9 @@ mod tests {
         let grid = Grid::new(5).unwrap();
         let m = Material::object_b();
         let reference = Reference::new(&m, grid).unwrap();
+        use crate::mechanics::fem::dynamics::Formulation;
         for f in [Formulation::Linear, Formulation::Corotational] {
-            let r = evaluate(&reference, &m, &ModelUnderTest::Fem(f)).unwrap();
+            let r = evaluate(&reference, &m, Model::Fem(f), None).unwrap();
             assert!(r.worst_force_error < 1e-9 && r.worst_frequency_error < 1e-9, "{r:?}");
             assert!(r.cases.iter().all(|c| c.field_error < 1e-9));
         }

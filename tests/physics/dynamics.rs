@@ -9,7 +9,7 @@ use tissue_sim::mechanics::fem::dynamics::Formulation;
 use tissue_sim::mechanics::grid::Grid;
 use tissue_sim::mechanics::material::Material;
 use tissue_sim::mechanics::msm::Topology;
-use tissue_sim::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, ModelChoice, Simulation, choose_step};
+use tissue_sim::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, choose_step};
 
 const ZETA: f64 = 0.2;
 
@@ -22,7 +22,7 @@ fn measured_release_of_whole_models_matches_the_single_mode_closed_forms() {
     for (integrator, dt) in
         [(Integrator::Symplectic, 2e-4), (Integrator::Prefactored, 1e-3), (Integrator::Prefactored, 1.0 / 60.0)]
     {
-        let config = Configuration { model: ModelChoice::Fem(Formulation::Linear), params: None, integrator, dt };
+        let config = Configuration { model: Model::Fem(Formulation::Linear), params: None, integrator, dt };
         let r = measure(&refs, config).expect("measure");
         let p = r.predicted.expect("stable");
         assert!((r.measured_period_s / p.period_s - 1.0).abs() < 1e-6, "{integrator:?} {dt}: {r:?}");
@@ -33,7 +33,7 @@ fn measured_release_of_whole_models_matches_the_single_mode_closed_forms() {
     }
     // Backward Euler at one 60 Hz frame swallows the motion: the 15 Hz fundamental then decays
     // at more than twice the damping set.
-    let fem = modal_model(&material, ModelChoice::Fem(Formulation::Linear), None).expect("modal");
+    let fem = modal_model(&material, Model::Fem(Formulation::Linear), None).expect("modal");
     let w = tissue_sim::response::modal::scene_fundamental(&fem).expect("fundamental");
     let frame = single_mode::discrete(Scheme::BackwardEuler, w, 2.0 * ZETA * w, 1.0 / 60.0).expect("stable");
     assert!(frame.damping_ratio > 2.0 * ZETA, "{frame:?}");
@@ -66,7 +66,7 @@ fn reference_transients_converge_at_second_order() {
 }
 
 /// A tissue of `model` with `zeta`, loaded by the viewer scene's step load and stepped for `t` s.
-fn settled(model: ModelChoice, zeta: f64, integrator: Integrator, dt: f64, t: f64) -> Vec<[f64; 3]> {
+fn settled(model: Model, zeta: f64, integrator: Integrator, dt: f64, t: f64) -> Vec<[f64; 3]> {
     let material = Material::object_a();
     let tissue = model.build(&material, None, zeta).expect("build");
     let scene = view_scene(&Grid::paper());
@@ -87,20 +87,20 @@ fn damped_motion_settles_to_the_static_answer_whatever_the_damping() {
     let scene = view_scene(&grid);
     let material = Material::object_a();
     // The linear FEM: its static answer is K^-1 f.
-    let fem = modal_model(&material, ModelChoice::Fem(Formulation::Linear), None).expect("modal");
+    let fem = modal_model(&material, Model::Fem(Formulation::Linear), None).expect("modal");
     let u = fem.static_shape(&scene).expect("static");
     let exact: Vec<[f64; 3]> = u.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     let scale = exact.iter().flat_map(|p| p.iter()).fold(0.0f64, |a, b| a.max(b.abs()));
     for zeta in [0.2, 1.0] {
-        let got = settled(ModelChoice::Fem(Formulation::Linear), zeta, Integrator::Prefactored, 1e-3, 3.0);
+        let got = settled(Model::Fem(Formulation::Linear), zeta, Integrator::Prefactored, 1e-3, 3.0);
         assert!(max_diff(&got, &exact) < 1e-6 * scale, "zeta {zeta}: {:e}", max_diff(&got, &exact) / scale);
     }
     // The hex lattice (nonlinear springs): two damping ratios settle to one answer, its
     // equilibrium, which at 1 N is within 1 % of its small-displacement static shape.
-    let hex = modal_model(&material, ModelChoice::Lattice(Topology::Hex), None).expect("modal");
+    let hex = modal_model(&material, Model::Lattice(Topology::Hex), None).expect("modal");
     let linear: Vec<[f64; 3]> =
         hex.static_shape(&scene).expect("static").chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    let lattice = ModelChoice::Lattice(Topology::Hex);
+    let lattice = Model::Lattice(Topology::Hex);
     let a = settled(lattice, 0.2, Integrator::Prefactored, 1e-3, 3.0);
     let b = settled(lattice, 1.0, Integrator::Prefactored, 1e-3, 3.0);
     assert!(max_diff(&a, &linear) < 1e-2 * scale, "{:e}", max_diff(&a, &linear) / scale);
@@ -111,17 +111,17 @@ fn damped_motion_settles_to_the_static_answer_whatever_the_damping() {
 fn the_viewer_default_meets_its_dynamic_targets_and_the_automatic_step_follows_the_budget() {
     // The viewer's default: the hex tissue of object A, the automatic choice at 0.1 ms.
     let material = Material::object_a();
-    let tissue = ModelChoice::Lattice(Topology::Hex).build(&material, None, ZETA).expect("build");
+    let tissue = Model::Lattice(Topology::Hex).build(&material, None, ZETA).expect("build");
     let (integrator, dt, _) =
         choose_step(None, 1e-4, tissue.explicit_dt_limit(), tissue.damping(), DEFAULT_DYNAMIC_BUDGET).expect("auto");
     let refs = References::new(&material, ZETA).expect("reference");
-    let r = measure(&refs, Configuration { model: ModelChoice::Lattice(Topology::Hex), params: None, integrator, dt })
+    let r = measure(&refs, Configuration { model: Model::Lattice(Topology::Hex), params: None, integrator, dt })
         .expect("measure");
     assert!(r.period_error < 0.02, "{r:?}");
     assert!(r.damping_error < 0.01, "{r:?}");
     // The FEM asked for 1 ms steps: backward Euler there damps 4 % of critical too much, so the
     // automatic choice takes substeps, and its prediction meets the budget.
-    let fem = ModelChoice::Fem(Formulation::Corotational).build(&material, None, ZETA).expect("fem");
+    let fem = Model::Fem(Formulation::Corotational).build(&material, None, ZETA).expect("fem");
     let (i, h, note) =
         choose_step(None, 1e-3, fem.explicit_dt_limit(), fem.damping(), DEFAULT_DYNAMIC_BUDGET).expect("auto");
     assert!(h < 1e-3 && note.is_some(), "{i:?} {h} {note:?}");

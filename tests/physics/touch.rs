@@ -11,7 +11,8 @@ use tissue_sim::mechanics::grid::Grid;
 use tissue_sim::mechanics::material::Material;
 use tissue_sim::mechanics::msm::{MsmParams, Topology};
 use tissue_sim::response::linear::{group_values, with_group_values};
-use tissue_sim::validate::touch_score::{ModelUnderTest, Reference, evaluate};
+use tissue_sim::sim::Model;
+use tissue_sim::validate::touch_score::{Reference, evaluate};
 
 #[test]
 fn shipped_tissues_record_their_validation_scores_and_the_default_is_the_best() {
@@ -22,7 +23,7 @@ fn shipped_tissues_record_their_validation_scores_and_the_default_is_the_best() 
             let shipped = tissue_sim::sim::shipped::shipped(&m, topology).expect("shipped");
             assert_eq!(shipped.cases, CaseSet::Touch, "{} {}", m.name, topology.name());
             let recorded = shipped.validation.expect("recorded scores");
-            let r = evaluate(&reference, &m, &ModelUnderTest::Lattice(shipped.params)).expect("scores");
+            let r = evaluate(&reference, &m, Model::Lattice(shipped.params.topology()), Some(shipped.params)).expect("scores");
             for (a, b) in [
                 (recorded.worst_force_error, r.worst_force_error),
                 (recorded.median_force_error, r.median_force_error),

@@ -6,7 +6,7 @@ use tissue_sim::sim::Integrator;
 fn script(actions: Vec<Action>) -> Script {
     Script {
         object: "A".into(),
-        model: tissue_sim::sim::ModelChoice::Lattice(tissue_sim::mechanics::msm::Topology::Shear),
+        model: tissue_sim::sim::Model::Lattice(tissue_sim::mechanics::msm::Topology::Shear),
         dt: 1e-4,
         integrator: None,
         damping_ratio: None,

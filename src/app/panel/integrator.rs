@@ -20,7 +20,7 @@ fn dynamics(ui: &mut egui::Ui, shown: &Shown, published: &Published, requests: &
             }
             let hz = omega_1 / (2.0 * std::f64::consts::PI);
             ui.label(format!("fundamental {hz:.2} Hz (face z = 0 clamped, the model's own modes)"));
-            let budget = published.budget.unwrap_or(crate::sim::DEFAULT_DYNAMIC_BUDGET);
+            let budget = crate::sim::DEFAULT_DYNAMIC_BUDGET;
             if let Some((i, dt)) = published.integrator {
                 match crate::sim::predicted_error(i, dt, damping) {
                     Some((p, d)) => {

@@ -4,7 +4,7 @@
 use crate::app::state::{Request, Shown, ViewSettings};
 use crate::mechanics::fem::dynamics::Formulation;
 use crate::mechanics::msm::Topology;
-use crate::sim::ModelChoice;
+use crate::sim::Model;
 
 /// People tell forces apart at about 7 % (Pang, Tan and Durlach 1991).
 const FORCE_BUDGET: f64 = 0.07;
@@ -67,19 +67,19 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
     }
     let mut model = shown.model();
     ui.horizontal_wrapped(|ui| {
-        let mut pick = |ui: &mut egui::Ui, m: ModelChoice, label: &str| {
+        let mut pick = |ui: &mut egui::Ui, m: Model, label: &str| {
             if ui.selectable_value(&mut model, m, label).changed() {
                 requests.push(match m {
-                    ModelChoice::Lattice(t) => Request::SelectTopology(t),
-                    ModelChoice::Fem(f) => Request::SelectFem(f),
+                    Model::Lattice(t) => Request::SelectTopology(t),
+                    Model::Fem(f) => Request::SelectFem(f),
                 });
             }
         };
-        pick(ui, ModelChoice::Lattice(Topology::Hex), "hex lattice (default)");
-        pick(ui, ModelChoice::Lattice(Topology::Shear), "shear springs");
-        pick(ui, ModelChoice::Lattice(Topology::Axis), "paper: axis springs");
-        pick(ui, ModelChoice::Fem(Formulation::Linear), "FEM linear");
-        pick(ui, ModelChoice::Fem(Formulation::Corotational), "FEM corotational");
+        pick(ui, Model::Lattice(Topology::Hex), "hex lattice (default)");
+        pick(ui, Model::Lattice(Topology::Shear), "shear springs");
+        pick(ui, Model::Lattice(Topology::Axis), "paper: axis springs");
+        pick(ui, Model::Fem(Formulation::Linear), "FEM linear");
+        pick(ui, Model::Fem(Formulation::Corotational), "FEM corotational");
     });
     validation(ui, shown, requests);
     if shown.fem.is_some() {

@@ -4,7 +4,8 @@
 use egui_plot::{Corner, Legend, MarkerShape, Plot, PlotPoints, Points};
 
 use crate::app::worker::{Slot, State};
-use crate::study::chart::{ChartIntegrator, ChartOptions, ChartPoint, ModelKind, compute};
+use crate::sim::Integrator;
+use crate::study::chart::{CHART_ORDER, ChartOptions, ChartPoint, compute};
 use crate::study::choose::{Budget, Choice, Metric, choose};
 
 const COLOURS: [egui::Color32; 5] = [
@@ -205,10 +206,10 @@ fn speed_accuracy_plot(ui: &mut egui::Ui, mine: &[&ChartPoint]) {
         .x_axis_label("log10 wall time per simulated s; circle explicit, triangle implicit")
         .y_axis_label("log10 avg error (% of h)")
         .show(ui, |plot| {
-            for (i, kind) in ModelKind::ALL.iter().enumerate() {
-                let name = kind.name();
+            for (i, kind) in CHART_ORDER.iter().enumerate() {
+                let name = kind.chart_name();
                 for (integrator, shape) in
-                    [(ChartIntegrator::Explicit, MarkerShape::Circle), (ChartIntegrator::Implicit, MarkerShape::Up)]
+                    [(Integrator::Symplectic, MarkerShape::Circle), (Integrator::Prefactored, MarkerShape::Up)]
                 {
                     let pts: Vec<[f64; 2]> = mine
                         .iter()

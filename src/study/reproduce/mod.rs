@@ -297,7 +297,7 @@ fn richer_lattices(
 /// The touch benchmark of every shipped tissue, of the same lattices calibrated on the paper's
 /// cases, and of the load-free stiffness fit: all scored on the validation set.
 fn touch_section(md: &mut String, material: &Material, grid: Grid, paper_trained: &[MsmParams]) -> anyhow::Result<()> {
-    use crate::validate::touch_score::{ModelUnderTest, Reference, evaluate};
+    use crate::validate::touch_score::{Reference, evaluate};
     let reference = Reference::new(material, grid)?;
     let fem = crate::mechanics::fem::FemModel::new(grid, material);
     let ti = material.is_transversely_isotropic();
@@ -327,7 +327,7 @@ fn touch_section(md: &mut String, material: &Material, grid: Grid, paper_trained
         v = reference.cases.iter().filter(|c| c.set == crate::validate::touch::Set::Validation).count()
     );
     for (label, cases, params) in rows {
-        let r = evaluate(&reference, material, &ModelUnderTest::Lattice(params))?;
+        let r = evaluate(&reference, material, crate::sim::Model::Lattice(params.topology()), Some(params))?;
         let _ = writeln!(
             md,
             "| {label} | {cases} | {:.1} % | {:.1} % | {:.1} % |",

@@ -1,0 +1,167 @@
+//! The one integrator vocabulary and the step policy: which integrator and step a model may run
+//! at the step asked for ([`choose_step`], with [`choose_integrator`]'s stability rule for a fixed
+//! step), meeting a dynamic budget on the fundamental that each scheme's closed form on one mode
+//! predicts ([`crate::response::single_mode`]).
+
+use crate::response::damping::Damping;
+
+/// Time integrator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Integrator {
+    /// Symplectic (semi-implicit) Euler: cheap, stable below a critical time step.
+    Symplectic,
+    /// Linearised backward Euler: stable for any time step, one sparse factorisation per step.
+    Implicit,
+    /// Linearised backward Euler with the rest tangent factorised once: one solve per step.
+    Prefactored,
+}
+
+impl Integrator {
+    /// What the integrator is on a linear model's mode ([`crate::response::single_mode`]).
+    pub fn scheme(self) -> crate::response::single_mode::Scheme {
+        match self {
+            Integrator::Symplectic => crate::response::single_mode::Scheme::Symplectic,
+            Integrator::Implicit | Integrator::Prefactored => crate::response::single_mode::Scheme::BackwardEuler,
+        }
+    }
+
+    /// The lower-case name used on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Symplectic => "symplectic",
+            Integrator::Implicit => "implicit",
+            Integrator::Prefactored => "prefactored",
+        }
+    }
+}
+
+/// The automatic choice runs symplectic Euler up to this fraction of its stability limit.
+pub const AUTO_EXPLICIT_FRACTION: f64 = 0.5;
+/// Symplectic Euler, asked for by name, is accepted up to this fraction of its limit.
+pub const MAX_EXPLICIT_FRACTION: f64 = 0.9;
+
+/// The integrator policy: `requested` (or the automatic choice for `None`: symplectic at most
+/// [`AUTO_EXPLICIT_FRACTION`] of the explicit `limit`, prefactored implicit otherwise), refused
+/// with a message for symplectic Euler above [`MAX_EXPLICIT_FRACTION`] of its limit.
+pub fn choose_integrator(requested: Option<Integrator>, dt: f64, limit: f64) -> Result<Integrator, String> {
+    match requested {
+        None => Ok(if dt <= AUTO_EXPLICIT_FRACTION * limit { Integrator::Symplectic } else { Integrator::Prefactored }),
+        Some(Integrator::Symplectic) if dt > MAX_EXPLICIT_FRACTION * limit => Err(format!(
+            "symplectic Euler at dt = {:.3e} s is above {MAX_EXPLICIT_FRACTION} x its stability limit of about \
+             {limit:.3e} s for this tissue",
+            dt
+        )),
+        Some(i) => Ok(i),
+    }
+}
+
+/// Budgets on the dynamic error of the fundamental that the automatic choice of
+/// [`choose_step`] meets: the period's relative error and the damping ratio's error (in units of
+/// critical), both against the model's own damped fundamental, predicted by the integrator's
+/// closed form ([`crate::response::single_mode`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DynamicBudget {
+    /// Largest relative period error (0.02 = 2 %).
+    pub period: f64,
+    /// Largest damping ratio error, in units of critical (0.01 = 1 % of critical).
+    pub damping: f64,
+}
+
+/// The viewer's dynamic budget: period within 2 %, damping within 1 % of critical.
+pub const DEFAULT_DYNAMIC_BUDGET: DynamicBudget = DynamicBudget { period: 0.02, damping: 0.01 };
+
+/// The automatic choice divides the step asked for into at most this many substeps.
+pub const MAX_AUTO_SUBSTEPS: usize = 64;
+
+/// What `scheme` at step `h` does to the fundamental of `damping` (`None`: no fundamental known),
+/// as (period error, damping error), or `None` when it does not keep the mode (unstable).
+pub fn predicted_error(integrator: Integrator, h: f64, damping: Damping) -> Option<(f64, f64)> {
+    let omega = damping.omega_1()?;
+    let zeta = damping.ratio()?;
+    let gamma = 2.0 * zeta * omega;
+    let want = crate::response::single_mode::exact(omega, gamma);
+    let got = crate::response::single_mode::discrete(integrator.scheme(), omega, gamma, h)?;
+    Some((
+        crate::response::single_mode::period_error(got.period_s, want.period_s),
+        (got.damping_ratio - want.damping_ratio).abs(),
+    ))
+}
+
+/// The step policy: the integrator and step for the step `dt` asked for.
+///
+/// * An integrator asked for by name runs at `dt` ([`choose_integrator`]'s rule).
+/// * The automatic choice (`None`) for a model damped by a ratio takes the fewest substeps
+///   `dt / k` (`k <= MAX_AUTO_SUBSTEPS`) at which an integrator meets `budget` on the
+///   fundamental, symplectic Euler also staying within [`AUTO_EXPLICIT_FRACTION`] of its
+///   `limit`; symplectic Euler wins a tie (its step is the cheaper). When none meets it, the
+///   prefactored step at `dt`, with a note. For the paper's nodal damping (no fundamental known)
+///   it is [`choose_integrator`]'s stability rule at `dt`.
+///
+/// Returns the integrator, the step and a note for the user.
+pub fn choose_step(
+    requested: Option<Integrator>,
+    dt: f64,
+    limit: f64,
+    damping: Damping,
+    budget: DynamicBudget,
+) -> Result<(Integrator, f64, Option<String>), String> {
+    let meets = |i: Integrator, h: f64| {
+        predicted_error(i, h, damping).is_some_and(|(p, d)| p <= budget.period && d <= budget.damping)
+    };
+    if requested.is_some() || damping.omega_1().is_none() {
+        let i = choose_integrator(requested, dt, limit)?;
+        let note = match predicted_error(i, dt, damping) {
+            Some((p, d)) if !meets(i, dt) => Some(format!(
+                "{} at dt = {} s misses the dynamic budget on the fundamental: period error {:.2} % (budget {:.1} %),                  damping error {:.2} % of critical (budget {:.1} %)",
+                i.name(),
+                crate::io::num(dt),
+                100.0 * p,
+                100.0 * budget.period,
+                100.0 * d,
+                100.0 * budget.damping
+            )),
+            _ => None,
+        };
+        return Ok((i, dt, note));
+    }
+    let first = |i: Integrator| {
+        (1..=MAX_AUTO_SUBSTEPS).find(|&k| {
+            let h = dt / k as f64;
+            (i != Integrator::Symplectic || h <= AUTO_EXPLICIT_FRACTION * limit) && meets(i, h)
+        })
+    };
+    let choice = match (first(Integrator::Symplectic), first(Integrator::Prefactored)) {
+        (Some(e), Some(i)) if i < e => Some((Integrator::Prefactored, i)),
+        (Some(e), _) => Some((Integrator::Symplectic, e)),
+        (None, Some(i)) => Some((Integrator::Prefactored, i)),
+        (None, None) => None,
+    };
+    Ok(match choice {
+        Some((i, 1)) => (i, dt, None),
+        Some((i, k)) => {
+            let h = dt / k as f64;
+            (
+                i,
+                h,
+                Some(format!(
+                    "automatic: {} at {} s ({k} substeps of the {} s asked for) keeps the fundamental's period \
+                     within {:.1} % and its damping within {:.1} % of critical",
+                    i.name(),
+                    crate::io::num(h),
+                    crate::io::num(dt),
+                    100.0 * budget.period,
+                    100.0 * budget.damping
+                )),
+            )
+        }
+        None => (
+            Integrator::Prefactored,
+            dt,
+            Some(format!(
+                "no step down to dt / {MAX_AUTO_SUBSTEPS} meets the dynamic budget; prefactored implicit Euler at {} s",
+                crate::io::num(dt)
+            )),
+        ),
+    })
+}

@@ -1,0 +1,358 @@
+//! The running tissue: any [`Tissue`] model stepped at a fixed time step under the step policy,
+//! with the user's tools and a blow-up guard.
+
+use super::integrator::{DEFAULT_DYNAMIC_BUDGET, Integrator, choose_step};
+use super::msm_tissue::MsmTissue;
+use super::tissue::Tissue;
+use super::tool::Tool;
+use crate::mechanics::cases::LoadCase;
+use crate::mechanics::msm::{MsmModel, MsmParams};
+
+/// Stiffness of the dragging spring, N/m, and its damping, N s/m.
+pub const DRAG_STIFFNESS: f64 = 1000.0;
+const DRAG_DAMPING: f64 = 1.0;
+
+/// What a blow-up looked like, and what to change.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlowUp {
+    /// Simulated time at detection, s.
+    pub time_s: f64,
+    /// What went wrong and what to change.
+    pub message: String,
+    /// The guard gave up: this was the [`MAX_RECOVERIES`]-th blow-up in a row (no healthy step
+    /// past the previous one's time), so the state went back to rest, the tool was let go, and
+    /// stepping on would only repeat it. The caller stops (a script fails; the viewer pauses).
+    pub fatal: bool,
+}
+
+/// Consecutive recoveries after which the guard stops a run ([`BlowUp::fatal`]).
+pub const MAX_RECOVERIES: u32 = 3;
+
+/// Why a state is not good.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Unhealthy {
+    NonFinite,
+    OutsideCube,
+    Energy,
+}
+
+/// The running tissue.
+#[derive(Debug)]
+pub struct Simulation {
+    /// The model and its state.
+    pub tissue: Box<dyn Tissue>,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// What was asked for (`None`: the automatic choice), kept for [`Simulation::set_params`].
+    requested: Option<Integrator>,
+    /// The step asked for, s (the automatic choice may run substeps of it).
+    requested_dt: f64,
+    /// Time step, s.
+    pub dt: f64,
+    /// The active tool.
+    pub tool: Tool,
+    /// Simulated time, s.
+    pub time_s: f64,
+    base_load: [Vec<f64>; 3],
+    /// Force of the tissue on the tool, newtons (last step).
+    pub tool_force: [f64; 3],
+    /// Last good state (positions, velocities, time), refreshed every 100 healthy steps.
+    good_x: [Vec<f64>; 3],
+    good_v: [Vec<f64>; 3],
+    good_time: Option<f64>,
+    steps_since_good: usize,
+    rest: [Vec<f64>; 3],
+    contact_forces: [Vec<f64>; 3],
+    /// Blow-ups since the last healthy step past the previous blow-up's time.
+    recoveries: u32,
+    /// Simulated time of the last blow-up, s.
+    last_blow_up_s: f64,
+}
+
+impl Simulation {
+    /// A mass-spring `model` at rest, one face clamped by `case` (if any) with its loads.
+    pub fn new(model: MsmModel, integrator: Integrator, dt: f64, case: Option<&LoadCase>) -> Self {
+        let density = model.node_mass * model.grid.num_nodes() as f64 / crate::mechanics::grid::CUBE_SIDE_M.powi(3);
+        Self::with_tissue(Box::new(MsmTissue::new(model, density)), integrator, dt, case)
+    }
+
+    /// Any tissue model at rest, one face clamped by `case` (if any) with its loads.
+    pub fn with_tissue(mut tissue: Box<dyn Tissue>, integrator: Integrator, dt: f64, case: Option<&LoadCase>) -> Self {
+        if let Some(c) = case {
+            tissue.apply_case(c);
+        }
+        let base_load = tissue.f_ext_mut().clone();
+        let grid = tissue.grid();
+        let nn = grid.num_nodes();
+        let zeros = || std::array::from_fn(|_| vec![0.0; nn]);
+        let rest = std::array::from_fn(|c| (0..nn).map(|p| grid.position(p)[c]).collect());
+        Self {
+            integrator,
+            requested: Some(integrator),
+            requested_dt: dt,
+            dt,
+            tool: Tool::None,
+            time_s: 0.0,
+            base_load,
+            tool_force: [0.0; 3],
+            good_x: zeros(),
+            good_v: zeros(),
+            good_time: None,
+            steps_since_good: 0,
+            rest,
+            contact_forces: zeros(),
+            recoveries: 0,
+            last_blow_up_s: f64::NEG_INFINITY,
+            tissue,
+        }
+    }
+
+    /// The explicit stability limit of the running model (cached by the model), s.
+    pub fn dt_limit(&self) -> f64 {
+        self.tissue.explicit_dt_limit()
+    }
+
+    /// Sets the integrator and step by [`choose_step`] (the automatic choice meets
+    /// the viewer's dynamic budget ([`DEFAULT_DYNAMIC_BUDGET`])); on a refusal switches to prefactored implicit Euler and says so.
+    /// The request is kept: new parameters or damping apply the policy again.
+    pub fn set_integrator(&mut self, requested: Option<Integrator>, dt: f64) -> Option<String> {
+        self.requested = requested;
+        self.requested_dt = dt;
+        match choose_step(requested, dt, self.dt_limit(), self.tissue.damping(), DEFAULT_DYNAMIC_BUDGET) {
+            Ok((i, h, note)) => {
+                (self.integrator, self.dt) = (i, h);
+                note
+            }
+            Err(why) => {
+                (self.integrator, self.dt) = (Integrator::Prefactored, dt);
+                Some(format!("{why}: switched to prefactored implicit Euler"))
+            }
+        }
+    }
+
+    /// Replaces the parameters, keeping the state (a calibration result applied live), and
+    /// applies the integrator policy to the new explicit limit (what it says, if anything).
+    pub fn set_params(&mut self, params: MsmParams) -> Result<Option<String>, String> {
+        self.tissue.set_params(params)?;
+        Ok(self.set_integrator(self.requested, self.requested_dt))
+    }
+
+    /// Damps the tissue by the ratio `zeta` at its fundamental and applies the integrator policy
+    /// again (what it says, if anything).
+    pub fn set_damping_ratio(&mut self, zeta: f64) -> Result<Option<String>, String> {
+        self.tissue.set_damping_ratio(zeta)?;
+        Ok(self.set_integrator(self.requested, self.requested_dt))
+    }
+
+    /// Node displacements from rest, row = node.
+    pub fn displacements(&self) -> Vec<[f64; 3]> {
+        let x = self.tissue.x();
+        (0..x[0].len()).map(|p| std::array::from_fn(|c| x[c][p] - self.rest[c][p])).collect()
+    }
+
+    /// Applies a load case (fixed nodes and loads), keeping the state.
+    pub fn apply_case(&mut self, case: &LoadCase) {
+        self.tissue.apply_case(case);
+        let f = self.tissue.f_ext_mut();
+        for c in 0..3 {
+            self.base_load[c].copy_from_slice(&f[c]);
+        }
+        self.good_time = None;
+    }
+
+    /// Back to rest (positions and velocities), keeping fixed nodes and loads; the guard's count
+    /// starts again.
+    pub fn reset(&mut self) {
+        self.back_to_rest();
+        self.recoveries = 0;
+        self.last_blow_up_s = f64::NEG_INFINITY;
+    }
+
+    fn back_to_rest(&mut self) {
+        let (x, v) = self.tissue.x_v_mut();
+        for c in 0..3 {
+            x[c].copy_from_slice(&self.rest[c]);
+            v[c].fill(0.0);
+        }
+        self.time_s = 0.0;
+        self.good_time = None;
+    }
+
+    /// Advances one step; on a blow-up restores the last good state and says why.
+    pub fn step(&mut self) -> Result<(), BlowUp> {
+        self.apply_tool_load();
+        let stepped = self.tissue.step(self.integrator, self.dt);
+        self.enforce_contact();
+        self.time_s += self.dt;
+        let unhealthy = if stepped.is_ok() { self.unhealthy() } else { None };
+        if stepped.is_ok() && unhealthy.is_none() {
+            if self.time_s > self.last_blow_up_s {
+                self.recoveries = 0;
+            }
+            self.steps_since_good += 1;
+            if self.good_time.is_none() || self.steps_since_good >= 100 {
+                let (x, v) = (self.tissue.x(), self.tissue.v());
+                for c in 0..3 {
+                    self.good_x[c].copy_from_slice(&x[c]);
+                    self.good_v[c].copy_from_slice(&v[c]);
+                }
+                self.good_time = Some(self.time_s);
+                self.steps_since_good = 0;
+            }
+            return Ok(());
+        }
+        let limit = self.dt_limit();
+        let dragging = matches!(self.tool, Tool::Drag { .. });
+        let message = match (stepped, self.integrator, unhealthy) {
+            (Err(e), _, _) => format!("the implicit solve failed ({e}); the state was reset"),
+            (Ok(()), Integrator::Symplectic, _) if self.dt > limit => format!(
+                "diverged: symplectic Euler with dt = {:.3e} s is above its stability limit of about {limit:.3e} s \
+                 for this stiffness; the state was reset. Lower dt or choose the implicit integrator.",
+                self.dt
+            ),
+            (Ok(()), _, Some(Unhealthy::OutsideCube)) if dragging => "the dragged node was pulled more than the \
+                 cube's side (0.1 m) from rest; the state was reset. Keep the drag target near the cube (positions \
+                 are in metres)."
+                .to_owned(),
+            (Ok(()), _, Some(Unhealthy::OutsideCube)) => "a node moved more than the cube's side (0.1 m) from rest; \
+                 the state was reset. Lower the loads or dt, or choose the implicit integrator."
+                .to_owned(),
+            (Ok(()), _, _) => "diverged (non-finite or runaway energy); the state was reset. Lower dt, soften the \
+                            tool, or choose the implicit integrator."
+                .to_owned(),
+        };
+        let time_s = self.time_s;
+        if time_s > self.last_blow_up_s {
+            self.last_blow_up_s = time_s;
+        }
+        self.recoveries += 1;
+        let fatal = self.recoveries >= MAX_RECOVERIES;
+        if fatal {
+            self.good_time = None;
+            self.last_blow_up_s = f64::NEG_INFINITY;
+            self.recoveries = 0;
+        }
+        self.restore();
+        let message = if fatal {
+            format!("stopped after {MAX_RECOVERIES} blow-ups in a row, back at rest: {message}")
+        } else {
+            message
+        };
+        Err(BlowUp { time_s, message, fatal })
+    }
+
+    fn restore(&mut self) {
+        match self.good_time {
+            Some(t) => {
+                let (x, v) = self.tissue.x_v_mut();
+                for c in 0..3 {
+                    x[c].copy_from_slice(&self.good_x[c]);
+                    v[c].copy_from_slice(&self.good_v[c]);
+                }
+                self.time_s = t;
+            }
+            None => self.back_to_rest(),
+        }
+        self.tool = Tool::None;
+        self.tool_force = [0.0; 3];
+    }
+
+    /// Why the state is not good, if it is not: a NaN, a node more than the cube's side from
+    /// its rest position (bounded relative to the cube, not to some absolute size), or a kinetic
+    /// energy of the whole mass moving at 10 m/s.
+    fn unhealthy(&self) -> Option<Unhealthy> {
+        let l = crate::mechanics::grid::CUBE_SIDE_M;
+        let (x, v) = (self.tissue.x(), self.tissue.v());
+        let finite = x.iter().chain(v).all(|c| c.iter().all(|v| v.is_finite()));
+        if !finite {
+            return Some(Unhealthy::NonFinite);
+        }
+        for c in 0..3 {
+            if x[c].iter().zip(&self.rest[c]).any(|(x, r)| (x - r).abs() > l) {
+                return Some(Unhealthy::OutsideCube);
+            }
+        }
+        if self.tissue.kinetic_energy() > 0.5 * self.tissue.total_mass() * 10.0 * 10.0 {
+            return Some(Unhealthy::Energy);
+        }
+        None
+    }
+
+    fn apply_tool_load(&mut self) {
+        if self.tool == Tool::None {
+            self.tool_force = [0.0; 3];
+        }
+        let drag = match self.tool {
+            Tool::Drag { node, target } => {
+                let (x, v) = (self.tissue.x(), self.tissue.v());
+                let f: [f64; 3] =
+                    std::array::from_fn(|c| DRAG_STIFFNESS * (target[c] - x[c][node]) - DRAG_DAMPING * v[c][node]);
+                Some((node, f))
+            }
+            _ => None,
+        };
+        let f_ext = self.tissue.f_ext_mut();
+        for c in 0..3 {
+            f_ext[c].copy_from_slice(&self.base_load[c]);
+        }
+        if let Some((node, f)) = drag {
+            for c in 0..3 {
+                f_ext[c][node] += f[c];
+            }
+            self.tool_force = f.map(|v| -v);
+        }
+    }
+
+    /// Projects nodes out of the probe sphere, removes their inward velocity, and sums the
+    /// tissue's push on the probe (the inward part of each contact node's spring force).
+    fn enforce_contact(&mut self) {
+        let Tool::Probe { centre, radius } = self.tool else {
+            return;
+        };
+        let mut push = [0.0; 3];
+        let nn = self.rest[0].len();
+        // The force on every node before any is projected.
+        let computed = self.tissue.forces();
+        for c in 0..3 {
+            self.contact_forces[c].copy_from_slice(&computed[c]);
+        }
+        for p in 0..nn {
+            if self.tissue.free()[p] == 0.0 {
+                continue;
+            }
+            let x = self.tissue.x();
+            let d = [x[0][p] - centre[0], x[1][p] - centre[1], x[2][p] - centre[2]];
+            let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            if dist >= radius {
+                continue;
+            }
+            let n = if dist > 1e-12 { d.map(|c| c / dist) } else { [0.0, 0.0, 1.0] };
+            let f = [self.contact_forces[0][p], self.contact_forces[1][p], self.contact_forces[2][p]];
+            let (x, v) = self.tissue.x_v_mut();
+            for c in 0..3 {
+                x[c][p] = centre[c] + radius * n[c];
+            }
+            let vn = v[0][p] * n[0] + v[1][p] * n[1] + v[2][p] * n[2];
+            if vn < 0.0 {
+                for c in 0..3 {
+                    v[c][p] -= vn * n[c];
+                }
+            }
+            let fn_ = f[0] * n[0] + f[1] * n[1] + f[2] * n[2];
+            if fn_ < 0.0 {
+                for c in 0..3 {
+                    push[c] += fn_ * n[c];
+                }
+            }
+        }
+        self.tool_force = push;
+    }
+
+    /// Node positions as f32 for drawing.
+    pub fn positions_f32(&self, out: &mut [[f32; 3]]) {
+        let x = self.tissue.x();
+        for (p, o) in out.iter_mut().enumerate() {
+            *o = [x[0][p] as f32, x[1][p] as f32, x[2][p] as f32];
+        }
+    }
+}
