@@ -1,7 +1,7 @@
 //! The seam between the interactive simulation and a tissue model: [`Tissue`] is what
-//! [`super::simulation::Simulation`] (tools, contact, blow-up guard), the physics thread and `simulate` need
-//! of a model, whatever it is. The mass-spring lattices ([`super::msm_tissue::MsmTissue`]) and the FEM
-//! ([`super::fem_tissue::FemTissue`]) implement it.
+//! the simulation (tools, contact, blow-up guard), the physics thread and `simulate` need
+//! of a model, whatever it is. The mass-spring lattices (`MsmTissue`) and the FEM
+//! (`FemTissue`) implement it.
 //!
 //! State is node-wise in structure-of-arrays form: positions `x[c][p]`, velocities `v[c][p]`,
 //! external forces `f_ext[c][p]` (components `c = 0..3`, node `p`), and `free[p]` (1 for a free

@@ -4,11 +4,15 @@
 
 pub mod bench;
 pub mod chart;
+pub mod chart_measure;
+pub mod chart_point;
 pub mod choose;
+pub mod pareto;
 pub mod plot;
 pub mod reproduce;
 pub mod script;
 pub mod stability;
+pub mod timing;
 
 use std::fmt::Write as _;
 use std::path::Path;

@@ -8,13 +8,14 @@
 //! topology in [`MsmParams::topology`]. No model is built on this side: the physics thread builds
 //! it from a recipe.
 
+mod jobs;
+
 use std::sync::Arc;
 
-use super::calibration_job::{self, Progress};
+use super::calibration_job::Progress;
 use super::physics::{Command, Replacement};
 pub use super::settings::{ProbeComparison, Shown, ToolKind, ViewSettings};
 use super::worker::{Slot, State};
-use crate::calibrate::Settings;
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::fem::FemModel;
 use crate::mechanics::grid::Grid;
@@ -260,76 +261,6 @@ impl ViewerState {
         send(Command::Replace(self.replacement()));
     }
 
-    /// Scores the running model on the touch benchmark in the background (again when it ends,
-    /// if the model changes meanwhile).
-    fn start_validation(&mut self) {
-        if self.validation.busy() {
-            self.validation_stale = true;
-            return;
-        }
-        self.validation_stale = false;
-        self.shown.validation = None;
-        let (material, grid) = (self.shown.material.clone(), self.grid);
-        let model = self.model_under_test();
-        let wake = Arc::clone(&self.wake);
-        let started = self.validation.start(
-            "touch validation",
-            move || wake(),
-            move |ctx| {
-                let r = crate::validate::touch_score::Reference::new(&material, grid)
-                    .and_then(|reference| crate::validate::touch_score::evaluate(&reference, &material, model.0, Some(model.1)))
-                    .map(|r| crate::sim::shipped::RecordedScores {
-                        worst_force_error: r.worst_force_error,
-                        median_force_error: r.median_force_error,
-                        worst_frequency_error: r.worst_frequency_error,
-                    })
-                    .map_err(|e| format!("{e:#}"));
-                ctx.send(r);
-            },
-        );
-        if let Err(e) = started {
-            self.shown.validation = Some(Err(e.to_string()));
-        }
-    }
-
-    /// The FEM's force and the running model's on the probe sphere where it was last pressed,
-    /// both static in their small-displacement response with the same node contact.
-    fn start_fem_probe(&mut self) {
-        let Some((centre, radius)) = self.shown.last_probe else {
-            self.shown.note = Some("press the probe into the cube first".into());
-            return;
-        };
-        let (material, grid) = (self.shown.material.clone(), self.grid);
-        let model = self.model_under_test();
-        let wake = Arc::clone(&self.wake);
-        let started = self.fem_probe.start(
-            "FEM probe force",
-            move || wake(),
-            move |ctx| {
-                let force = |(m, p): (Model, MsmParams)| -> anyhow::Result<f64> {
-                    let (mut r, _) = crate::validate::touch_score::responder(m, Some(p), &material, grid)?;
-                    Ok(r.solver.probe(&grid, centre, radius)?.force_n())
-                };
-                let fem = force((Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear), model.1));
-                let r = fem.map(|f| ProbeComparison {
-                    centre,
-                    fem_n: f,
-                    model_n: force(model).map_err(|e| format!("{e:#}")),
-                });
-                ctx.send(r.map_err(|e| format!("{e:#}")));
-            },
-        );
-        if let Err(e) = started {
-            self.shown.note = Some(e.to_string());
-        }
-    }
-
-    /// The running model as the touch benchmark scores it: the model and the lattice's
-    /// parameters (unused by the FEM).
-    fn model_under_test(&self) -> (Model, MsmParams) {
-        (self.shown.model(), self.shown.params)
-    }
-
     fn apply_case(&mut self, send: &mut dyn FnMut(Command)) {
         let case =
             LoadCase::clamped(&self.grid, &self.shown.material.name, self.settings.case_axis, self.settings.case_force);
@@ -358,30 +289,6 @@ impl ViewerState {
         send(Command::SetTool(Tool::None));
         send(Command::Reset);
         send(Command::ApplyCase(case));
-    }
-
-    fn start_calibration(&mut self) {
-        let settings = Settings {
-            method: self.settings.calib_method,
-            seed: self.settings.calib_seed,
-            population: self.settings.calib_population,
-            generations: self.settings.calib_generations,
-            ..Settings::default()
-        };
-        let wake = Arc::clone(&self.wake);
-        let material = self.shown.material.clone();
-        let job =
-            calibration_job::Job { material, topology: self.shown.topology(), cases: self.settings.calib_cases, settings };
-        match calibration_job::start(&mut self.calibration, job, move || wake()) {
-            Ok(()) => {
-                self.shown.history.clear();
-                self.shown.result = None;
-                self.shown.note = None;
-                self.shown.calibrating = true;
-                self.shown.calib_generations = self.settings.calib_generations;
-            }
-            Err(e) => self.shown.note = Some(format!("cannot start the calibration: {e}")),
-        }
     }
 
     /// Takes what the background jobs have sent.
