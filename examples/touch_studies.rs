@@ -13,14 +13,14 @@ use argmin::core::{CostFunction, Executor, Gradient};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::LBFGS;
 use std::cell::RefCell;
+use tissue_sim::calibrate::fit::touch_cost;
 use tissue_sim::mechanics::grid::Grid;
 use tissue_sim::mechanics::material::Material;
 use tissue_sim::mechanics::msm::Topology;
-use tissue_sim::calibrate::fit::touch_cost;
 use tissue_sim::response::linear::{GroupedStiffness, group_of, group_values};
-use tissue_sim::validate::touch_score::{Responder, case_score};
 use tissue_sim::validate::touch::Set;
 use tissue_sim::validate::touch_score::Reference;
+use tissue_sim::validate::touch_score::{Responder, case_score};
 
 fn on_surface(grid: &Grid, p: usize) -> bool {
     grid.ijk(p).iter().any(|&c| c == 0 || c == grid.n() - 1)

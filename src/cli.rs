@@ -6,19 +6,19 @@ use std::process::ExitCode;
 use anyhow::{Context as _, bail};
 use clap::{Args, Parser, Subcommand};
 
-use crate::validate::accuracy::{case_errors, cost, format_table};
 use crate::calibrate::{CaseSet, CostMode, GeneSpace, Method, Problem, Settings, calibrate};
+use crate::io::{read_json, write_atomic, write_json_atomic};
 use crate::mechanics::cases::{Bc, benchmark_cases};
+use crate::mechanics::displacement_file::{CaseRecord, DisplacementFile};
 use crate::mechanics::fem::FemModel;
 use crate::mechanics::fem::dynamics::Formulation;
 use crate::mechanics::grid::Grid;
-use crate::io::{read_json, write_atomic, write_json_atomic};
-use crate::mechanics::displacement_file::{CaseRecord, DisplacementFile};
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmModel, MsmParams, Topology, statics};
 use crate::render::scene::ColourMode;
 use crate::sim::Integrator;
 use crate::study::choose::Metric;
+use crate::validate::accuracy::{case_errors, cost, format_table};
 
 /// Implements [`clap::ValueEnum`] for a core enum, so that clap stays in the command-line layer:
 /// each variant with its command-line name and its help (the variant's doc, as clap's derive
@@ -906,8 +906,11 @@ fn dynamics_text(r: &crate::validate::dynamic_measure::DynamicReport, note: Opti
         );
     }
     for e in &r.transients {
-        let what =
-            if e.transient == crate::validate::dynamic_reference::Transient::ProbeTap { "probe force" } else { "loaded face" };
+        let what = if e.transient == crate::validate::dynamic_reference::Transient::ProbeTap {
+            "probe force"
+        } else {
+            "loaded face"
+        };
         t += &format!(
             "trajectory error ({what}), {}: {:.3} % (FEM reference: Newmark, converged at {} s)\n",
             e.transient.name(),

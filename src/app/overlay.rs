@@ -9,8 +9,8 @@ use glam::Vec3;
 use crate::mechanics::grid::Grid;
 use crate::render::gpu::LineVertex;
 use crate::render::mesh::SurfaceMesh;
-use crate::render::{fixed_outline, lattice_edges, normalise, push_edges};
 use crate::render::scene::ColourMode;
+use crate::render::{fixed_outline, lattice_edges, normalise, push_edges};
 use crate::sim::Tool;
 
 /// What the overlays show.

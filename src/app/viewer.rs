@@ -10,14 +10,14 @@ use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
 use winit::window::WindowId;
 
+use super::gestures::{Gesture, Scene, view_input};
 use super::overlay::{Overlay, Show, legend};
+use super::panel::study::StudyPanel;
 use super::panel::{self, PanelContext};
 use super::physics::{Command, PhysicsThread, Published};
 use super::state::{Request, ViewerState};
 use super::stats::Stats;
-use super::panel::study::StudyPanel;
 use super::surface::{CubeFrame, EguiFrame, Surface};
-use super::gestures::{Gesture, Scene, view_input};
 use crate::render::camera::OrbitCamera;
 use crate::render::gpu::SurfaceStyle;
 use crate::render::mesh::SurfaceMesh;

@@ -18,6 +18,7 @@ use crate::mechanics::msm::forces::TangentAssembler;
 use crate::mechanics::msm::statics::{NewtonOptions, StaticError, case_dofs, closed_form_axis, solve_newton_with};
 use crate::mechanics::msm::{MsmModel, MsmParams, ParamError, Topology};
 use crate::mechanics::sparse::SparseError;
+use glam::DVec3;
 
 /// Errors of a cost evaluation or of setting up a calibration problem.
 #[derive(Debug, thiserror::Error)]
@@ -118,8 +119,7 @@ impl Problem {
                 (ua, perp, idx)
             })
             .collect();
-        let paper_scale =
-            fem.iter().flat_map(|f| &f.displacements).map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()).sum();
+        let paper_scale = fem.iter().flat_map(|f| &f.displacements).map(|u| DVec3::from(*u).length()).sum();
         Ok(Self {
             material,
             grid,
@@ -227,7 +227,7 @@ impl Problem {
             let mut g: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
             for p in 0..nn {
                 let d: [f64; 3] = std::array::from_fn(|c| sol.displacements[p][c] - fem.displacements[p][c]);
-                let norm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                let norm = DVec3::from(d).length();
                 cost += norm;
                 if norm > 0.0 && !fixed[p] {
                     for c in 0..3 {
@@ -247,7 +247,7 @@ impl Problem {
             for s in unit.springs() {
                 let group = crate::response::linear::group_of(unit.families[s.family].family);
                 let d: [f64; 3] = std::array::from_fn(|c| x[c][s.b] - x[c][s.a]);
-                let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                let l = DVec3::from(d).length();
                 let coef = s.k * (l - s.rest) / l;
                 grad[group] += coef * (0..3).map(|c| d[c] * (mu[c][s.a] - mu[c][s.b])).sum::<f64>();
             }
@@ -265,7 +265,8 @@ impl Problem {
                 empty => empty.insert(crate::calibrate::fit::lattice_responder(reference, self.topology)?),
             };
             let theta = crate::response::linear::group_values(params);
-            let (cost, g) = crate::calibrate::fit::touch_cost(reference, crate::validate::touch::Set::Training, responder, &theta)?;
+            let (cost, g) =
+                crate::calibrate::fit::touch_cost(reference, crate::validate::touch::Set::Training, responder, &theta)?;
             let mut grad = [0.0; 7];
             grad.copy_from_slice(&g);
             Ok((cost, grad))

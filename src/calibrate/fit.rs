@@ -13,11 +13,11 @@
 //! and Cavusoglu 2010): the non-negative least-squares fit of the lattice's stiffness matrix to
 //! the FEM's in the Frobenius norm, solved exactly over the few parameters.
 
-use crate::validate::touch::Set;
-use crate::response::linear::{GroupedStiffness, with_group_values};
-use crate::validate::touch_score::{Reference, Responder};
 use crate::mechanics::fem::FemModel;
 use crate::mechanics::msm::{MsmParams, Topology};
+use crate::response::linear::{GroupedStiffness, with_group_values};
+use crate::validate::touch::Set;
+use crate::validate::touch_score::{Reference, Responder};
 
 /// Which stiffness groups are free, and which copy another (a transversely isotropic material,
 /// axis 1 distinct: `k3 = k2`, `c13 = c12`).
@@ -114,7 +114,10 @@ pub fn touch_cost(
 }
 
 /// A lattice's responder for the touch cost (factorised at unit parameters).
-pub fn lattice_responder(reference: &Reference, topology: Topology) -> Result<Responder, crate::mechanics::sparse::SparseError> {
+pub fn lattice_responder(
+    reference: &Reference,
+    topology: Topology,
+) -> Result<Responder, crate::mechanics::sparse::SparseError> {
     Responder::new(reference.grid, GroupedStiffness::lattice(reference.grid, topology), &[1.0; 7])
 }
 

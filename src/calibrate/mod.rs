@@ -23,9 +23,9 @@ pub mod transient;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
+pub use crate::sim::shipped::CaseSet;
 pub use cost::{CostError, Problem, Workspace};
 pub use genes::GeneSpace;
-pub use crate::sim::shipped::CaseSet;
 
 use crate::mechanics::msm::{MsmParams, Topology};
 

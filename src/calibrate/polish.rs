@@ -10,8 +10,8 @@ use argmin::core::{CostFunction, Executor, Gradient};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::LBFGS;
 
-use crate::mechanics::msm::MsmParams;
 use crate::calibrate::fit::Groups;
+use crate::mechanics::msm::MsmParams;
 use crate::response::linear::{group_values, with_group_values};
 
 /// L-BFGS iterations at most.

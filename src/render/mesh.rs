@@ -4,6 +4,7 @@
 //! normals are recomputed from the deformed positions (area-weighted triangle normals).
 
 use crate::mechanics::grid::Grid;
+use glam::Vec3;
 
 /// A surface vertex as the GPU reads it.
 #[repr(C)]
@@ -92,7 +93,7 @@ impl SurfaceMesh {
             }
         }
         for (v, n) in self.vertices.iter_mut().zip(&self.normals) {
-            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt().max(1e-30);
+            let len = Vec3::from(*n).length().max(1e-30);
             v.normal = [n[0] / len, n[1] / len, n[2] / len];
         }
     }
@@ -103,7 +104,7 @@ impl SurfaceMesh {
     /// and the node of the hit triangle nearest to it (Moller-Trumbore).
     pub fn pick(&self, o: [f32; 3], d: [f32; 3]) -> Option<([f32; 3], usize)> {
         let sub = |a: [f32; 3], b: [f32; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-        let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let dot = |a: [f32; 3], b: [f32; 3]| Vec3::from(a).dot(Vec3::from(b));
         let cross = |a: [f32; 3], b: [f32; 3]| {
             [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
         };
@@ -164,7 +165,7 @@ mod tests {
         m.update(&x, None);
         for v in &m.vertices {
             let c = [v.position[0] - 0.05, v.position[1] - 0.05, v.position[2] - 0.05];
-            let dot = c[0] * v.normal[0] + c[1] * v.normal[1] + c[2] * v.normal[2];
+            let dot = Vec3::from(c).dot(Vec3::from(v.normal));
             assert!(dot > 0.0, "{v:?}");
         }
     }

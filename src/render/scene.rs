@@ -2,6 +2,7 @@
 //! load case in static equilibrium, and its colour map.
 
 use anyhow::Context as _;
+use glam::DVec3;
 
 use crate::mechanics::cases::parse_case_id;
 use crate::mechanics::grid::Grid;
@@ -13,8 +14,6 @@ use crate::render::mesh::SurfaceMesh;
 use crate::render::offscreen::{Headless, encode_png};
 use crate::render::{fixed_outline, lattice_edges, normalise};
 
-/// Re-exported for the app layer, which still imports it from here; the tissues live in
-/// [`crate::sim::shipped`].
 use crate::sim::shipped::tissue_params;
 
 /// Per-node colour map.
@@ -74,7 +73,7 @@ impl StaticScene {
         let params = tissue_params(&material, topology)?;
         let model = MsmModel::new(grid, params, material.density)?;
         let u = crate::mechanics::msm::statics::equilibrium(&model, &case)?;
-        let largest = u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()).fold(0.0, f64::max);
+        let largest = u.iter().map(|d| DVec3::from(*d).length()).fold(0.0, f64::max);
         let side = crate::mechanics::grid::CUBE_SIDE_M;
         if magnify * largest > side {
             anyhow::bail!(
@@ -91,17 +90,14 @@ impl StaticScene {
         let mut scalar_max = 0.0;
         let scalar = match colour {
             ColourMode::None => None,
-            ColourMode::Displacement => {
-                Some(u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() as f32).collect())
-            }
+            ColourMode::Displacement => Some(u.iter().map(|d| DVec3::from(*d).length() as f32).collect()),
             ColourMode::Error => {
-                let fem = crate::mechanics::fem::FemModel::new(grid, &material).solve_cases(std::slice::from_ref(&case))?;
+                let fem =
+                    crate::mechanics::fem::FemModel::new(grid, &material).solve_cases(std::slice::from_ref(&case))?;
                 Some(
                     u.iter()
                         .zip(&fem[0].displacements)
-                        .map(|(a, b)| {
-                            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt() as f32
-                        })
+                        .map(|(a, b)| DVec3::from(*a).distance(DVec3::from(*b)) as f32)
                         .collect(),
                 )
             }

@@ -10,6 +10,7 @@ use crate::mechanics::grid::{Grid, SpringFamily};
 use crate::mechanics::msm::model::Spring;
 use crate::mechanics::msm::{MsmModel, MsmParams, Topology};
 use crate::mechanics::sparse::{SparseError, SpdSystem};
+use glam::DVec3;
 
 /// Parameter groups of a spring lattice, in this order.
 pub const GROUP_NAMES: [&str; 7] = ["k1", "k2", "k3", "c12", "c13", "c23", "b"];
@@ -84,7 +85,7 @@ impl GroupedStiffness {
             let fam = model.families[s.family].family;
             let g = group(&s, fam) as u8;
             let o = fam.offset.map(f64::from);
-            let len = (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt();
+            let len = DVec3::from(o).length();
             let d = o.map(|c| c / len);
             for i in 0..3 {
                 for j in 0..3 {
@@ -162,7 +163,7 @@ pub struct ProbeAnswer {
 impl ProbeAnswer {
     /// The magnitude of the force on the probe, newtons.
     pub fn force_n(&self) -> f64 {
-        self.force.iter().map(|c| c * c).sum::<f64>().sqrt()
+        DVec3::from(self.force).length()
     }
 }
 
@@ -230,7 +231,7 @@ pub fn sphere_geometry(grid: &Grid, centre: [f64; 3], radius: f64) -> Vec<([f64;
         .map(|p| {
             let x = grid.position(p);
             let d = [x[0] - centre[0], x[1] - centre[1], x[2] - centre[2]];
-            let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let dist = DVec3::from(d).length();
             let n = if dist > 1e-12 { d.map(|c| c / dist) } else { [0.0, 0.0, 1.0] };
             (n, radius - dist)
         })
@@ -325,7 +326,7 @@ fn probe_sensitivity(
     dofs: usize,
 ) -> Vec<f64> {
     let mut sensitivity = vec![0.0; dofs];
-    let magnitude = force.iter().map(|c| c * c).sum::<f64>().sqrt();
+    let magnitude = DVec3::from(*force).length();
     if let Some(factor) = chol
         && magnitude > 0.0
     {
@@ -371,7 +372,7 @@ mod tests {
         let mut expected = 0.0;
         for s in model.springs() {
             let o = model.families[s.family].family.offset.map(f64::from);
-            let len = (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt();
+            let len = DVec3::from(o).length();
             let stretch: f64 = (0..3).map(|c| o[c] / len * (x[3 * s.b + c] - x[3 * s.a + c])).sum();
             expected += 0.5 * s.k * stretch * stretch;
         }

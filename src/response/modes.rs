@@ -2,8 +2,8 @@
 //! lumped (diagonal) masses, by subspace iteration on the factorised stiffness with a
 //! Rayleigh-Ritz projection each step.
 
-use crate::response::linear::SceneSolver;
 use crate::mechanics::sparse::SparseError;
+use crate::response::linear::SceneSolver;
 
 /// Iteration limit of the subspace iteration.
 const MAX_ITERATIONS: usize = 500;
@@ -75,10 +75,10 @@ pub fn lowest_modes(solver: &mut SceneSolver, mass: &[f64], count: usize) -> Res
 
 #[cfg(test)]
 mod tests {
-    use crate::response::linear::GroupedStiffness;
     use super::*;
     use crate::mechanics::grid::Grid;
     use crate::mechanics::msm::{MsmModel, MsmParams};
+    use crate::response::linear::GroupedStiffness;
 
     #[test]
     fn subspace_iteration_matches_a_dense_eigensolve() {

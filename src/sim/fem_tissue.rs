@@ -7,11 +7,11 @@
 use super::integrator::Integrator;
 use super::tissue::Tissue;
 use crate::mechanics::cases::LoadCase;
-use crate::response::damping::Damping;
 use crate::mechanics::fem::FemModel;
 use crate::mechanics::fem::dynamics::{FemDynamics, Formulation};
 use crate::mechanics::grid::Grid;
 use crate::mechanics::msm::MsmParams;
+use crate::response::damping::Damping;
 
 /// A FEM cube as a [`Tissue`].
 #[derive(Debug)]

@@ -6,6 +6,7 @@ use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::msm::{Dynamics, MsmModel, MsmParams};
 use crate::response::damping::Damping;
+use glam::DVec3;
 
 /// The mass-proportional damping of `zeta` for `model` (a lattice), and the rate applied; its
 /// fundamental is solved unless `known` (the same model's).
@@ -138,7 +139,7 @@ pub fn explicit_dt_limit(model: &MsmModel) -> f64 {
     for s in model.springs() {
         let k = model.families[s.family].stiffness[s.a];
         let d = model.families[s.family].family.offset.map(|o| f64::from(o.abs()));
-        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let len = DVec3::from(d).length();
         // Row sums of k d d^T (and its off-diagonal copy) for the worst component.
         let w = (0..3).map(|c| d[c] / len * (d[0] + d[1] + d[2]) / len).fold(0.0, f64::max);
         row[s.a] += 2.0 * k * w;

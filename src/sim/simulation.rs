@@ -7,6 +7,7 @@ use super::tissue::Tissue;
 use super::tool::Tool;
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::msm::{MsmModel, MsmParams};
+use glam::DVec3;
 
 /// Stiffness of the dragging spring, N/m, and its damping, N s/m.
 pub const DRAG_STIFFNESS: f64 = 1000.0;
@@ -322,7 +323,7 @@ impl Simulation {
             }
             let x = self.tissue.x();
             let d = [x[0][p] - centre[0], x[1][p] - centre[1], x[2][p] - centre[2]];
-            let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let dist = DVec3::from(d).length();
             if dist >= radius {
                 continue;
             }
@@ -338,7 +339,7 @@ impl Simulation {
                     v[c][p] -= vn * n[c];
                 }
             }
-            let fn_ = f[0] * n[0] + f[1] * n[1] + f[2] * n[2];
+            let fn_ = DVec3::from(f).dot(DVec3::from(n));
             if fn_ < 0.0 {
                 for c in 0..3 {
                     push[c] += fn_ * n[c];

@@ -9,9 +9,9 @@
 
 use super::integrator::Integrator;
 use crate::mechanics::cases::LoadCase;
-use crate::response::damping::Damping;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::msm::MsmParams;
+use crate::response::damping::Damping;
 
 /// A tissue model the interactive simulation can step.
 pub trait Tissue: Send + std::fmt::Debug {

@@ -1,7 +1,7 @@
 //! `tissue-sim bench`: timings of the physics core, median of repeated batches, one thread.
 
-use std::collections::BTreeMap;
 use crate::study::timing::{time_fallible, time_per_call};
+use std::collections::BTreeMap;
 
 use crate::mechanics::cases::{Bc, LoadCase, benchmark_cases};
 use crate::mechanics::fem::FemModel;

@@ -17,8 +17,8 @@
 
 use std::time::Instant;
 
-use super::chart_measure::{MAX_COUPLED_IMPLICIT_N, cases, errors, model_points, sampled};
 pub use super::chart_measure::{ERROR_UNIT_M, damped_explicit_limit, msm_params_at, sample};
+use super::chart_measure::{MAX_COUPLED_IMPLICIT_N, cases, errors, model_points, sampled};
 pub use super::chart_point::{
     CHART_DAMPING_RATIO, CHART_ORDER, CHARTED, ChartPoint, IMPLICIT_STEPS_S, integrator_chart_name,
 };

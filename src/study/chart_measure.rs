@@ -1,7 +1,8 @@
 //! What the chart measures of one model at one resolution: its static answers at common sample
 //! points against the fine FEM, its explicit limit, the wall time of its explicit and implicit
-//! steps, its touch score and its dynamic errors (see [`super::chart`]).
+//! steps, its touch score and its dynamic errors (the chart's module docs say how).
 
+use glam::DVec3;
 use std::time::Instant;
 
 use super::chart_point::{ChartPoint, IMPLICIT_STEPS_S};
@@ -12,8 +13,8 @@ use crate::mechanics::fem::dynamics::{FemDynamics, Formulation};
 use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{Dynamics, MsmModel, MsmParams, Topology, statics};
-use crate::sim::{Integrator, Model};
 use crate::sim::shipped::tissue_params;
+use crate::sim::{Integrator, Model};
 use crate::study::timing::{time_fallible, time_per_call};
 
 /// Power iterations for the chart's `omega_max` (the stability study uses more): the Rayleigh
@@ -48,7 +49,8 @@ struct Stepping {
 
 impl PointBase<'_> {
     fn point(&self, st: &Stepping, dynamic: Option<&crate::validate::dynamic_measure::DynamicReport>) -> ChartPoint {
-        let pct = |f: fn(&crate::validate::dynamic_measure::DynamicReport) -> f64| dynamic.map_or(f64::NAN, |d| 100.0 * f(d));
+        let pct =
+            |f: fn(&crate::validate::dynamic_measure::DynamicReport) -> f64| dynamic.map_or(f64::NAN, |d| 100.0 * f(d));
         ChartPoint {
             object: self.object.into(),
             model: self.model,
@@ -156,9 +158,7 @@ pub(super) fn errors(model: &[Vec<[f64; 3]>], reference: &[Vec<[f64; 3]>]) -> (f
     let d: Vec<f64> = model
         .iter()
         .zip(reference)
-        .flat_map(|(m, r)| {
-            m.iter().zip(r).map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt())
-        })
+        .flat_map(|(m, r)| m.iter().zip(r).map(|(a, b)| DVec3::from(*a).distance(DVec3::from(*b))))
         .collect();
     let avg = d.iter().sum::<f64>() / d.len() as f64;
     let max = d.iter().copied().fold(0.0, f64::max);

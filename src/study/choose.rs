@@ -250,13 +250,7 @@ mod tests {
     const COARSE: Model = Model::Lattice(Topology::Hex);
     const FINE: Model = Model::Fem(Formulation::Linear);
 
-    fn point(
-        model: Model,
-        integrator: Integrator,
-        step_s: f64,
-        dt_max_s: f64,
-        max_err_pct: f64,
-    ) -> ChartPoint {
+    fn point(model: Model, integrator: Integrator, step_s: f64, dt_max_s: f64, max_err_pct: f64) -> ChartPoint {
         let force_err_pct = max_err_pct * 3.0;
         let dt_s = if dt_max_s.is_finite() { 0.9 * dt_max_s } else { 1e-3 };
         ChartPoint {

@@ -19,8 +19,8 @@ use std::path::Path;
 
 use anyhow::Context as _;
 
-use crate::mechanics::grid::Grid;
 use crate::io::OutputDir;
+use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmModel, Topology};
 use crate::sim::{Integrator, Model};

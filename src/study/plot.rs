@@ -5,8 +5,8 @@
 use plotters::prelude::*;
 
 use super::chart::ChartPoint;
-use crate::sim::{Integrator, Model};
 use super::stability::StabilityPoint;
+use crate::sim::{Integrator, Model};
 
 const COLOURS: [RGBColor; 5] = [
     RGBColor(31, 119, 180),

@@ -28,6 +28,7 @@
 //! guard stops the run with an error after [`crate::sim::MAX_RECOVERIES`] blow-ups in a row, and
 //! a symplectic integrator forced above its stability limit is refused before any step.
 
+use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::mechanics::cases::{LoadCase, parse_case_id};
@@ -282,7 +283,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
             .enumerate()
             .map(|(p, r)| {
                 let x = position(p);
-                ((x[0] - r[0]).powi(2) + (x[1] - r[1]).powi(2) + (x[2] - r[2]).powi(2)).sqrt()
+                DVec3::from(x).distance(DVec3::from(*r))
             })
             .fold(0.0, f64::max);
         let positions = (action.record() || i == last).then(|| (0..grid.num_nodes()).map(position).collect());
@@ -431,7 +432,7 @@ fn probe(
         );
     }
     check_point(&format!("action {i}: probe point \"at\""), &at)?;
-    let len = direction.iter().map(|d| d * d).sum::<f64>().sqrt();
+    let len = DVec3::from(direction).length();
     if !(len.is_finite() && len > 0.0) {
         anyhow::bail!("script: action {i}: probe needs a finite, non-zero direction");
     }
@@ -445,7 +446,7 @@ fn probe(
         step(sim, out)?;
         if s * samples % n < samples {
             let f = sim.tool_force;
-            let along = -(f[0] * dir[0] + f[1] * dir[1] + f[2] * dir[2]);
+            let along = -(DVec3::from(f).dot(DVec3::from(dir)));
             out.force_depth.push(ProbeSample { action: i, depth_m: d, force_n: along });
         }
     }

@@ -8,6 +8,7 @@
 //! [`PERTURBATION_M`] counts as diverged once any node has moved [`GROWTH`] times that much, so
 //! the bisection resolves `dt_crit` to about `1e-5` relative: far finer than the 5 % asked.
 
+use glam::DVec3;
 use rand::{RngExt, SeedableRng, rngs::Xoshiro256PlusPlus};
 
 use crate::mechanics::cases::LoadCase;
@@ -33,7 +34,7 @@ fn msm_rest_stiffness(model: &MsmModel) -> Vec<(usize, usize, [f64; 3], f64)> {
         .into_iter()
         .map(|s| {
             let o = model.families[s.family].family.offset.map(f64::from);
-            let l = (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt();
+            let l = DVec3::from(o).length();
             (s.a, s.b, o.map(|v| v / l), s.k)
         })
         .collect()
@@ -81,7 +82,7 @@ pub fn msm_omega_max(model: &MsmModel, fixed_nodes: &[bool], iterations: usize) 
         out.fill(0.0);
         for &(a, b, n, k) in &springs {
             let du = [u[3 * b] - u[3 * a], u[3 * b + 1] - u[3 * a + 1], u[3 * b + 2] - u[3 * a + 2]];
-            let s = k * (n[0] * du[0] + n[1] * du[1] + n[2] * du[2]);
+            let s = k * (DVec3::from(n).dot(DVec3::from(du)));
             for c in 0..3 {
                 out[3 * a + c] -= s * n[c];
                 out[3 * b + c] += s * n[c];

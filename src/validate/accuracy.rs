@@ -2,6 +2,7 @@
 //! tables (Tables IV and V: average and maximum nodal distance per case, in percent of `h`).
 
 use crate::mechanics::cases::CaseSolution;
+use glam::DVec3;
 
 /// Error of one case.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -19,7 +20,7 @@ pub struct CaseError {
 }
 
 fn distance(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    DVec3::from(*a).distance(DVec3::from(*b))
 }
 
 /// The paper's cost, eq. 1: the sum over cases and nodes of `|x_msm - x_fem|`, metres. Both models

@@ -14,15 +14,16 @@
 //!   run in the viewer's simulation (its contact and force readout), the relative L2 of the
 //!   force on the probe.
 
-use crate::response::damping::Damping;
-use crate::response::modal::{ModalModel, Mode};
-use crate::validate::dynamic_reference::{self, ReferenceTransient, Trajectory, Transient};
-use crate::response::single_mode::{self, ModeMotion};
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmModel, MsmParams};
+use crate::response::damping::Damping;
+use crate::response::modal::{ModalModel, Mode};
+use crate::response::single_mode::{self, ModeMotion};
 use crate::sim::{Integrator, Model, Tissue};
+use crate::validate::dynamic_reference::{self, ReferenceTransient, Trajectory, Transient};
+use glam::DVec3;
 
 /// Largest displacement of the release shape, m (small: every model is near linear).
 pub const RELEASE_AMPLITUDE_M: f64 = 5e-4;
@@ -333,7 +334,7 @@ fn tap(material: &Material, zeta: f64, config: Configuration) -> anyhow::Result<
         if sim.step().is_err() {
             return Ok(None);
         }
-        samples.push(vec![sim.tool_force.iter().map(|c| c * c).sum::<f64>().sqrt()]);
+        samples.push(vec![DVec3::from(sim.tool_force).length()]);
     }
     samples.resize(steps + 1, vec![0.0]);
     Ok(Some(Trajectory { dt: config.dt, samples }))

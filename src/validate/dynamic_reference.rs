@@ -16,11 +16,12 @@
 //! contact moves with the sphere along its normal); the answer compared: the magnitude of the
 //! contact nodes' elastic push on the probe, what the viewer reads.
 
-use crate::response::damping::mass_proportional_rate;
-use crate::response::modal::ModalModel;
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::sparse::{SparseError, SpdSystem};
+use crate::response::damping::mass_proportional_rate;
+use crate::response::modal::ModalModel;
+use glam::DVec3;
 
 /// Length of a transient, s.
 pub const DURATION_S: f64 = 0.2;
@@ -236,7 +237,7 @@ pub fn newmark(
                     }
                 }
             }
-            samples.push(vec![force.iter().map(|c| c * c).sum::<f64>().sqrt()]);
+            samples.push(vec![DVec3::from(force).length()]);
         } else {
             samples.push(dofs.iter().map(|&d| u[d]).collect());
         }

@@ -1,14 +1,14 @@
 //! The FEM's answers on the touch cases ([`Reference`]) and a model's scores against them
 //! ([`Report`], the JSON of `validate`).
 
-use crate::response::linear::{GroupedStiffness, SceneSolver, group_values, scene_fixed_dofs};
-use crate::response::modes;
-use crate::validate::touch::{Kind, Load, MODES, PROBE_RADIUS_M, Set, TouchCase, touch_cases};
 use crate::mechanics::fem::FemModel;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmModel, MsmParams, Topology};
+use crate::response::linear::{GroupedStiffness, SceneSolver, group_values, scene_fixed_dofs};
+use crate::response::modes;
 use crate::sim::Model;
+use crate::validate::touch::{Kind, Load, MODES, PROBE_RADIUS_M, Set, TouchCase, touch_cases};
 
 /// A model's answer to one case.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,7 +33,11 @@ pub struct Responder {
 
 impl Responder {
     /// The pattern of `stiffness` on `grid`'s scene, factorised at `theta`.
-    pub fn new(grid: Grid, stiffness: GroupedStiffness, theta: &[f64]) -> Result<Self, crate::mechanics::sparse::SparseError> {
+    pub fn new(
+        grid: Grid,
+        stiffness: GroupedStiffness,
+        theta: &[f64],
+    ) -> Result<Self, crate::mechanics::sparse::SparseError> {
         let mut solver = SceneSolver::new(&grid, &stiffness)?;
         solver.factor(&stiffness, theta)?;
         Ok(Self { stiffness, solver, grid })
@@ -46,7 +50,10 @@ impl Responder {
 
     /// The answer to `case`, and for a probe case the adjoint field of its force
     /// ([`crate::response::linear::ProbeAnswer::sensitivity`]).
-    pub fn answer(&mut self, case: &TouchCase) -> Result<(Answer, Option<Vec<f64>>), crate::mechanics::sparse::SparseError> {
+    pub fn answer(
+        &mut self,
+        case: &TouchCase,
+    ) -> Result<(Answer, Option<Vec<f64>>), crate::mechanics::sparse::SparseError> {
         match &case.load {
             Load::Forces(f) => {
                 let mut u = f.clone();

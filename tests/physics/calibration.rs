@@ -32,7 +32,9 @@ fn hybrid_reaches_the_exact_optimum_within_0_1_percent() {
                     kk[1] = kk[a];
                     kk[2] = kk[a];
                 }
-                let c = p.cost(&tissue_sim::mechanics::msm::MsmParams::axis(kk[0], kk[1], kk[2], 0.0), &mut ws).expect("cost");
+                let c = p
+                    .cost(&tissue_sim::mechanics::msm::MsmParams::axis(kk[0], kk[1], kk[2], 0.0), &mut ws)
+                    .expect("cost");
                 assert!(c > optimum, "{}: k{} x {f} gives {c} <= {optimum}", p.material.name, a + 1);
             }
         }

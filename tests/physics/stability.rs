@@ -8,9 +8,9 @@ use tissue_sim::mechanics::fem::dynamics::{FemDynamics, Formulation};
 use tissue_sim::mechanics::grid::Grid;
 use tissue_sim::mechanics::material::Material;
 use tissue_sim::mechanics::msm::{Dynamics, MsmModel, Topology};
+use tissue_sim::sim::shipped::tissue_params;
 use tissue_sim::sim::{Integrator, Simulation};
 use tissue_sim::study::stability::{fem_point, msm_point, scaled_undamped};
-use tissue_sim::sim::shipped::tissue_params;
 
 fn hex_model(grid: Grid, stiffness: f64) -> MsmModel {
     let m = Material::object_a();

@@ -23,7 +23,8 @@ fn shipped_tissues_record_their_validation_scores_and_the_default_is_the_best() 
             let shipped = tissue_sim::sim::shipped::shipped(&m, topology).expect("shipped");
             assert_eq!(shipped.cases, CaseSet::Touch, "{} {}", m.name, topology.name());
             let recorded = shipped.validation.expect("recorded scores");
-            let r = evaluate(&reference, &m, Model::Lattice(shipped.params.topology()), Some(shipped.params)).expect("scores");
+            let r = evaluate(&reference, &m, Model::Lattice(shipped.params.topology()), Some(shipped.params))
+                .expect("scores");
             for (a, b) in [
                 (recorded.worst_force_error, r.worst_force_error),
                 (recorded.median_force_error, r.median_force_error),
@@ -42,7 +43,8 @@ fn shipped_tissues_record_their_validation_scores_and_the_default_is_the_best() 
         }
         assert_eq!(best.1, tissue_sim::sim::shipped::DEFAULT_TOPOLOGY, "object {}", m.name);
         // The default tissue's lowest six frequencies are within 5 % of the FEM's.
-        let default = tissue_sim::sim::shipped::shipped(&m, tissue_sim::sim::shipped::DEFAULT_TOPOLOGY).expect("shipped");
+        let default =
+            tissue_sim::sim::shipped::shipped(&m, tissue_sim::sim::shipped::DEFAULT_TOPOLOGY).expect("shipped");
         let f = default.validation.expect("scores").worst_frequency_error;
         assert!(f < 0.05, "object {}: worst frequency error {f}", m.name);
     }

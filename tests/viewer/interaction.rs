@@ -1,7 +1,7 @@
 //! Scripted interaction (the `simulate` command's engine): deterministic and physically sane.
 
-use tissue_sim::study::script::{Action, Script, run};
 use tissue_sim::sim::Integrator;
+use tissue_sim::study::script::{Action, Script, run};
 
 fn script(actions: Vec<Action>) -> Script {
     Script {

@@ -10,8 +10,8 @@ pub mod view;
 
 use super::physics::Published;
 use super::state::{Request, Shown, ViewSettings};
-use study::StudyPanel;
 use crate::render::camera::OrbitCamera;
+use study::StudyPanel;
 
 /// What the panel reads and edits besides the viewer state.
 pub struct PanelContext<'a> {

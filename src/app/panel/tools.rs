@@ -2,6 +2,7 @@
 //! force-depth plot, and the paper's load cases with the live error against their FEM answer.
 
 use egui_plot::{Line, PlotPoints};
+use glam::DVec3;
 
 use super::PanelContext;
 use crate::app::overlay::error_vs_fem;
@@ -27,7 +28,7 @@ pub fn show(
         ui.add(egui::Slider::new(&mut settings.probe_radius_mm, 2.0..=30.0).text("probe radius (mm)"));
     }
     let f = ctx.published.tool_force;
-    let norm = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+    let norm = DVec3::from(f).length();
     ui.label(format!("force on tool: |F| = {norm:.4} N  ({:.4}, {:.4}, {:.4})", f[0], f[1], f[2]));
     if let Tool::Drag { .. } = shown.tool {
         ui.label(format!(

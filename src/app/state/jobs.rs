@@ -27,7 +27,9 @@ impl ViewerState {
             move || wake(),
             move |ctx| {
                 let r = crate::validate::touch_score::Reference::new(&material, grid)
-                    .and_then(|reference| crate::validate::touch_score::evaluate(&reference, &material, model.0, Some(model.1)))
+                    .and_then(|reference| {
+                        crate::validate::touch_score::evaluate(&reference, &material, model.0, Some(model.1))
+                    })
                     .map(|r| crate::sim::shipped::RecordedScores {
                         worst_force_error: r.worst_force_error,
                         median_force_error: r.median_force_error,
@@ -80,7 +82,6 @@ impl ViewerState {
         (self.shown.model(), self.shown.params)
     }
 
-
     /// Starts a calibration of the running topology with the panel's settings in the background.
     pub(super) fn start_calibration(&mut self) {
         let settings = Settings {
@@ -92,8 +93,12 @@ impl ViewerState {
         };
         let wake = Arc::clone(&self.wake);
         let material = self.shown.material.clone();
-        let job =
-            calibration_job::Job { material, topology: self.shown.topology(), cases: self.settings.calib_cases, settings };
+        let job = calibration_job::Job {
+            material,
+            topology: self.shown.topology(),
+            cases: self.settings.calib_cases,
+            settings,
+        };
         match calibration_job::start(&mut self.calibration, job, move || wake()) {
             Ok(()) => {
                 self.shown.history.clear();

@@ -21,8 +21,8 @@ use crate::mechanics::fem::FemModel;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmParams, Topology};
-use crate::sim::{Integrator, Model, Tool};
 use crate::sim::shipped::tissue_params;
+use crate::sim::{Integrator, Model, Tool};
 
 /// What the user asked for.
 #[derive(Debug, Clone, PartialEq)]

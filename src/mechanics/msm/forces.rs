@@ -10,6 +10,7 @@
 use super::model::{MsmModel, Spring};
 use super::reduction::DofMap;
 use crate::mechanics::sparse::{SparseError, SpdSystem};
+use glam::DVec3;
 
 /// Preallocated per-family pair forces for the force kernels.
 ///
@@ -229,7 +230,7 @@ impl TangentAssembler {
         for ((sp, weight), slots) in self.springs.iter().zip(&self.slots) {
             let (a, b) = (sp.a, sp.b);
             let d = [x[0][b] - x[0][a], x[1][b] - x[1][a], x[2][b] - x[2][a]];
-            let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(f64::MIN_POSITIVE);
+            let l = DVec3::from(d).length().max(f64::MIN_POSITIVE);
             let n = d.map(|v| v / l);
             let fam = &model.families[sp.family];
             let k = fam.stiffness[a];

@@ -1,6 +1,7 @@
 //! The mass-spring model: parameters, spring families and masses.
 
 use crate::mechanics::grid::{Grid, SpringFamily, axis_families, body_diagonal_families, face_diagonal_families};
+use glam::DVec3;
 
 /// Errors in MSM parameters.
 #[derive(Debug, thiserror::Error)]
@@ -313,7 +314,7 @@ impl MsmModel {
             for (p, &k) in f.stiffness.iter().enumerate() {
                 let (i, j) = (f.lo + p, f.lo + p + f.offset);
                 let d = [x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]];
-                let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                let l = DVec3::from(d).length();
                 e += 0.5 * k * (l - f.rest_length).powi(2);
             }
         }

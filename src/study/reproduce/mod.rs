@@ -10,12 +10,12 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use crate::validate::accuracy::{CaseError, case_errors, format_table};
 use crate::calibrate::{CalibrationResult, GeneSpace, Method, Problem, Settings, Workspace, calibrate};
-use crate::mechanics::grid::Grid;
 use crate::io::OutputDir;
+use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmParams, Topology};
+use crate::validate::accuracy::{CaseError, case_errors, format_table};
 use plot::{Series, line_panels};
 
 /// What to run.
