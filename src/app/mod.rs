@@ -1,13 +1,15 @@
-//! The interactive viewer: a winit window with a wgpu view of the cube and an egui side panel.
+//! Layer 8, the interactive viewer: a winit window with a wgpu view of the cube and an egui side
+//! panel. May use every layer below it (render, study, calibrate, validate, sim, response,
+//! mechanics, io); the physics loop runs on its own thread, never in the UI.
 //!
 //! - [`viewer`]: the event loop and the frame; [`surface`]: the window and its wgpu surface.
 //! - [`state`]: the window-free viewer state, which turns [`state::Request`]s into physics
-//!   commands, over what [`settings`] holds; [`panel`]: the side panel, a file per section; [`tools`]: mouse gestures;
-//!   [`overlay`]: colour scalar, legend and lines, once per frame; [`stats`]: frame rate and tool
-//!   latency.
-//! - Threads, all [`worker::Worker`]s: [`physics`] (steps the simulation), [`calibration`], the
-//!   chart of [`study_panel`], and the FEM answer of a load case. The UI thread only draws and
-//!   forwards input.
+//!   commands and background jobs, over what [`settings`] holds; [`panel`]: the side panel, a
+//!   file per section; [`gestures`]: mouse gestures; [`overlay`]: colour scalar, legend and
+//!   lines, once per frame; [`stats`]: frame rate and tool latency.
+//! - Threads, all [`worker::Worker`]s: [`physics`] (steps the simulation), [`calibration_job`],
+//!   the chart of [`panel::study`], and the FEM answer of a load case. The UI thread only draws
+//!   and forwards input.
 
 pub mod calibration_job;
 pub mod gestures;

@@ -1,5 +1,6 @@
-//! Calibration of the mass-spring model against the FEM reference (the paper's Sections III-IV):
-//! the hybrid GA+SA, and the pure GA and pure SA baselines of its Figs. 5-6.
+//! Layer 5, calibration of the mass-spring model against the FEM reference (the paper's Sections
+//! III-IV): the hybrid GA+SA, and the pure GA and pure SA baselines of its Figs. 5-6; the L-BFGS
+//! [`polish`]; the load-free stiffness [`fit`]. May use: validate, sim, response, mechanics, io.
 //!
 //! Built for a background thread: [`calibrate`] reports every generation through a callback
 //! (best cost, mean and standard deviation of fitness, evaluations so far), checks a cancel flag

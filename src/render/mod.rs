@@ -1,5 +1,6 @@
-//! Rendering of the tissue cube: the surface mesh and camera (CPU, no GPU types), the wgpu
-//! renderer shared by the window and the offscreen path, and headless rendering to PNG.
+//! Layer 7, rendering of the tissue cube: the surface mesh and camera (CPU, no GPU types), the
+//! wgpu renderer shared by the window and the offscreen path, headless rendering to PNG, and what
+//! a static scene draws ([`scene`]). May use: sim, mechanics, io.
 
 pub mod camera;
 pub mod gpu;

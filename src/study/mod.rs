@@ -1,6 +1,10 @@
-//! Speed against accuracy: the chart of every model, resolution and integrator ([`chart`]), the
-//! stability study of explicit integration ([`stability`]), and the choice of the smallest model
-//! that meets a scene's error and rate budget ([`choose`]).
+//! Layer 6, studies: speed against accuracy ([`chart`], one point [`chart_point`], the
+//! measurement of one model [`chart_measure`], [`pareto`] fronts, [`plot`]), the stability study
+//! of explicit integration ([`stability`]), the choice of the smallest model that meets a scene's
+//! error and rate budget ([`choose`]), the paper's tables and figures ([`reproduce`]), timings
+//! ([`timing`], [`bench`]) and scripted interaction ([`script`], `simulate`).
+//!
+//! May use: calibrate, validate, sim, response, mechanics, io.
 
 pub mod bench;
 pub mod chart;

@@ -10,9 +10,9 @@
 //! project's hex8 FEM on the same mesh, computed once per material and resolution
 //! ([`Reference`]).
 //!
-//! [`linear`] holds the stiffness, the solves and the contact; [`modes`] the frequencies;
-//! [`score`] the reference answers and the scores; [`fit`] the touch cost, its gradient, the
-//! L-BFGS polish and the load-free stiffness fit.
+//! The response layer's `linear` holds the stiffness, the solves and the contact, and its
+//! `modes` the frequencies; the sibling `touch_score` holds the reference answers and the scores;
+//! the calibration's `fit` the touch cost, its gradient and the load-free stiffness fit.
 
 use crate::mechanics::grid::Grid;
 
