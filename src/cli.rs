@@ -844,7 +844,7 @@ fn dynamics_command(
     let (integrator, dt, note) = crate::sim::choose_step(
         integrator,
         dt,
-        tissue.explicit_dt_limit(),
+        crate::sim::StepLimit::tissue(tissue.explicit_dt_limit()),
         tissue.damping(),
         crate::sim::DEFAULT_DYNAMIC_BUDGET,
     )

@@ -5,10 +5,22 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-/// A number as a message shows it: plain when moderate, in exponent form when tiny or huge
-/// (so that `1e-320` does not print as three hundred zeros).
+/// A number as a message shows it, short: exactly as typed when it has at most six significant
+/// digits (plain when moderate, `1e-300` in exponent form rather than three hundred zeros),
+/// otherwise rounded to four significant digits in exponent form (`4.156e-4`).
 pub fn num(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() || (1e-4..1e7).contains(&v.abs()) { format!("{v}") } else { format!("{v:e}") }
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let shortest = format!("{v:e}");
+    let digits = shortest.split('e').next().unwrap_or("").chars().filter(char::is_ascii_digit).count();
+    if digits > 6 {
+        format!("{v:.3e}")
+    } else if (1e-4..1e7).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        shortest
+    }
 }
 
 /// Largest file any command writes, bytes: a bound no input can exceed (a result over it is an
@@ -157,6 +169,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let mut tmp = builder
         .tempfile_in(dir)
         .with_context(|| format!("cannot write {}: cannot create a file in {}", path.display(), dir.display()))?;
+    let _pending = Pending::track(tmp.path());
     #[cfg(unix)]
     if let Some(m) = &existing {
         use std::os::unix::fs::{MetadataExt as _, PermissionsExt as _};
@@ -224,6 +237,7 @@ impl OutputDir {
             .prefix(".tissue-sim-")
             .tempdir_in(parent)
             .with_context(|| format!("cannot create a directory in {}", parent.display()))?;
+        let _pending = Pending::track(tmp.path());
         for (name, bytes) in &self.files {
             write_atomic(&tmp.path().join(name), bytes)?;
         }
@@ -238,6 +252,46 @@ impl OutputDir {
             return Err(e).with_context(|| format!("cannot create {}", dir.display()));
         }
         Ok(())
+    }
+}
+
+/// Temporary files and directories being written, removed by [`remove_pending`] when a signal
+/// ends the process before they are renamed into place.
+static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// A temporary path listed in [`PENDING`] while it lives.
+struct Pending(PathBuf);
+
+impl Pending {
+    fn track(path: &Path) -> Self {
+        if let Ok(mut p) = PENDING.lock() {
+            p.push(path.to_path_buf());
+        }
+        Self(path.to_path_buf())
+    }
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        if let Ok(mut p) = PENDING.lock() {
+            p.retain(|q| q != &self.0);
+        }
+    }
+}
+
+/// Removes every temporary file and directory still being written: what a signal handler calls
+/// before the process exits (SIGINT, SIGTERM), so that an interrupted write leaves nothing behind.
+pub fn remove_pending() {
+    let paths = match PENDING.lock() {
+        Ok(mut p) => std::mem::take(&mut *p),
+        Err(_) => return,
+    };
+    for p in paths {
+        if p.is_dir() {
+            let _ = std::fs::remove_dir_all(&p);
+        } else {
+            let _ = std::fs::remove_file(&p);
+        }
     }
 }
 
@@ -271,6 +325,46 @@ pub fn read_text(path: &Path) -> anyhow::Result<String> {
 mod tests {
     use super::*;
     use std::os::unix::fs::PermissionsExt as _;
+
+    /// Numbers in messages are short: as typed when short, four significant digits otherwise,
+    /// never hundreds of digits.
+    #[test]
+    fn numbers_print_short() {
+        assert_eq!(num(0.001), "0.001");
+        assert_eq!(num(1e-4), "0.0001");
+        assert_eq!(num(2.5), "2.5");
+        assert_eq!(num(1e308), "1e308");
+        assert_eq!(num(1e-300), "1e-300");
+        assert_eq!(num(0.0004155926674608283), "4.156e-4");
+        assert_eq!(num(-123456.789), "-1.235e5");
+        assert_eq!(num(f64::NAN), "NaN");
+        for v in [1e308, -1e-300, 1.0 / 3.0, 6.02e23, 5e-324] {
+            assert!(num(v).len() <= 10, "{v}: {}", num(v));
+        }
+    }
+
+    /// What a signal handler removes: the temporary files and directories still in flight.
+    #[test]
+    fn pending_temporaries_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join(".tissue-sim-x.tmp");
+        std::fs::write(&file, b"partial").unwrap();
+        let sub = dir.path().join(".tissue-sim-d");
+        std::fs::create_dir(&sub).unwrap();
+        let (_a, _b) = (Pending::track(&file), Pending::track(&sub));
+        remove_pending();
+        assert!(!file.exists() && !sub.exists());
+        drop(_a);
+        assert!(PENDING.lock().unwrap().iter().all(|p| p != &file));
+    }
+
+    /// Every input goes through one bounded reading path: a device that never ends is cut at the
+    /// bound and refused.
+    #[test]
+    fn endless_inputs_are_refused_at_the_bound() {
+        let e = read_text(Path::new("/dev/zero")).unwrap_err();
+        assert!(format!("{e:#}").contains("input bound"), "{e:#}");
+    }
 
     #[test]
     fn a_symlink_is_followed_not_replaced() {

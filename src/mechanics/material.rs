@@ -45,14 +45,9 @@ pub enum MaterialError {
     /// The stiffness matrix `C` is not positive definite.
     #[error("material stiffness C is not positive definite: {0}")]
     NotPositiveDefinite(String),
-    /// A material file could not be read.
-    #[error("cannot read material file {path}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The underlying error.
-        source: std::io::Error,
-    },
+    /// A material file could not be read (or is above the input bound).
+    #[error("material file: {0}")]
+    Read(String),
     /// A material file could not be parsed or misses a constant.
     #[error("invalid material file {path}: {message}")]
     Parse {
@@ -304,7 +299,8 @@ impl Material {
     /// else TOML). See [`MaterialFile`] for the keys.
     pub fn from_file(path: &Path) -> Result<Self, MaterialError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| MaterialError::Io { path: shown.clone(), source })?;
+        // The one bounded reading path of every input file.
+        let text = crate::io::read_text(path).map_err(|e| MaterialError::Read(format!("{e:#}")))?;
         let is_json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
         let file: MaterialFile = if is_json {
             serde_json::from_str(&text)

@@ -98,6 +98,9 @@ impl Tissue for FemTissue {
     fn total_mass(&self) -> f64 {
         self.total_mass
     }
+    fn node_mass(&self, p: usize) -> f64 {
+        self.dynamics.mass[3 * p]
+    }
     fn x(&self) -> &[Vec<f64>; 3] {
         &self.x
     }

@@ -41,18 +41,78 @@ pub const AUTO_EXPLICIT_FRACTION: f64 = 0.5;
 /// Symplectic Euler, asked for by name, is accepted up to this fraction of its limit.
 pub const MAX_EXPLICIT_FRACTION: f64 = 0.9;
 
-/// The integrator policy: `requested` (or the automatic choice for `None`: symplectic at most
-/// [`AUTO_EXPLICIT_FRACTION`] of the explicit `limit`, prefactored implicit otherwise), refused
-/// with a message for symplectic Euler above [`MAX_EXPLICIT_FRACTION`] of its limit.
-pub fn choose_integrator(requested: Option<Integrator>, dt: f64, limit: f64) -> Result<Integrator, String> {
-    match requested {
-        None => Ok(if dt <= AUTO_EXPLICIT_FRACTION * limit { Integrator::Symplectic } else { Integrator::Prefactored }),
-        Some(Integrator::Symplectic) if dt > MAX_EXPLICIT_FRACTION * limit => Err(format!(
-            "symplectic Euler at dt = {:.3e} s is above {MAX_EXPLICIT_FRACTION} x its stability limit of about \
-             {limit:.3e} s for this tissue",
-            dt
-        )),
-        Some(i) => Ok(i),
+/// The explicit stability limits a step must respect, s: the tissue's (symplectic Euler on its
+/// stiffest mode) and the dragging spring's (an external force, explicit under every integrator;
+/// infinite when no node can be dragged).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepLimit {
+    /// The tissue's explicit limit, s.
+    pub tissue: f64,
+    /// The dragging spring's limit on the lightest node it may hold, s.
+    pub tool: f64,
+}
+
+impl StepLimit {
+    /// Only the tissue's limit (no tool).
+    pub fn tissue(tissue: f64) -> Self {
+        Self { tissue, tool: f64::INFINITY }
+    }
+
+    /// The limit of `integrator`: symplectic Euler steps the tissue and the tool explicitly
+    /// (their squared frequencies add), the implicit schemes the tool only.
+    pub fn of(self, integrator: Integrator) -> f64 {
+        match integrator {
+            Integrator::Symplectic => 1.0 / (self.tissue.powi(-2) + self.tool.powi(-2)).sqrt(),
+            Integrator::Implicit | Integrator::Prefactored => self.tool,
+        }
+    }
+
+    /// Whether the automatic choice may run `integrator` at `h`: stable with a margin
+    /// ([`MAX_EXPLICIT_FRACTION`] of its limit), and symplectic Euler within
+    /// [`AUTO_EXPLICIT_FRACTION`] of the tissue's limit (its accuracy on the stiff modes).
+    pub fn auto_allows(self, integrator: Integrator, h: f64) -> bool {
+        h <= MAX_EXPLICIT_FRACTION * self.of(integrator)
+            && (integrator != Integrator::Symplectic || h <= AUTO_EXPLICIT_FRACTION * self.tissue)
+    }
+
+    /// Why `integrator` at `dt` is refused (above [`MAX_EXPLICIT_FRACTION`] of its limit), if it is.
+    pub fn refusal(self, integrator: Integrator, dt: f64) -> Option<String> {
+        let limit = self.of(integrator);
+        if dt <= MAX_EXPLICIT_FRACTION * limit {
+            return None;
+        }
+        let dt = crate::io::num(dt);
+        Some(if integrator == Integrator::Symplectic && self.tissue <= self.tool {
+            format!(
+                "symplectic Euler at dt = {dt} s is above {MAX_EXPLICIT_FRACTION} x its stability limit of about {} s \
+                 for this tissue",
+                crate::io::num(limit)
+            )
+        } else {
+            format!(
+                "{} at dt = {dt} s is above {MAX_EXPLICIT_FRACTION} x the stability limit of about {} s of the \
+                 dragging spring ({} N/m, {} N s/m, applied explicitly) on the lightest node it holds",
+                integrator.name(),
+                crate::io::num(limit),
+                super::tool::DRAG_STIFFNESS,
+                super::tool::DRAG_DAMPING
+            )
+        })
+    }
+}
+
+/// The integrator policy at a fixed step: `requested` (or the automatic choice for `None`:
+/// symplectic at most [`AUTO_EXPLICIT_FRACTION`] of its limit, prefactored implicit otherwise),
+/// refused with a message above [`MAX_EXPLICIT_FRACTION`] of the chosen integrator's limit.
+pub fn choose_integrator(requested: Option<Integrator>, dt: f64, limit: StepLimit) -> Result<Integrator, String> {
+    let i = requested.unwrap_or(if limit.auto_allows(Integrator::Symplectic, dt) {
+        Integrator::Symplectic
+    } else {
+        Integrator::Prefactored
+    });
+    match limit.refusal(i, dt) {
+        Some(why) => Err(why),
+        None => Ok(i),
     }
 }
 
@@ -102,7 +162,7 @@ pub fn predicted_error(integrator: Integrator, h: f64, damping: Damping) -> Opti
 pub fn choose_step(
     requested: Option<Integrator>,
     dt: f64,
-    limit: f64,
+    limit: StepLimit,
     damping: Damping,
     budget: DynamicBudget,
 ) -> Result<(Integrator, f64, Option<String>), String> {
@@ -113,7 +173,8 @@ pub fn choose_step(
         let i = choose_integrator(requested, dt, limit)?;
         let note = match predicted_error(i, dt, damping) {
             Some((p, d)) if !meets(i, dt) => Some(format!(
-                "{} at dt = {} s misses the dynamic budget on the fundamental: period error {:.2} % (budget {:.1} %),                  damping error {:.2} % of critical (budget {:.1} %)",
+                "{} at dt = {} s misses the dynamic budget on the fundamental: period error {:.2} % (budget {:.1} %), \
+                 damping error {:.2} % of critical (budget {:.1} %)",
                 i.name(),
                 crate::io::num(dt),
                 100.0 * p,
@@ -128,7 +189,7 @@ pub fn choose_step(
     let first = |i: Integrator| {
         (1..=MAX_AUTO_SUBSTEPS).find(|&k| {
             let h = dt / k as f64;
-            (i != Integrator::Symplectic || h <= AUTO_EXPLICIT_FRACTION * limit) && meets(i, h)
+            limit.auto_allows(i, h) && meets(i, h)
         })
     };
     let choice = match (first(Integrator::Symplectic), first(Integrator::Prefactored)) {
@@ -155,13 +216,50 @@ pub fn choose_step(
                 )),
             )
         }
-        None => (
-            Integrator::Prefactored,
-            dt,
-            Some(format!(
-                "no step down to dt / {MAX_AUTO_SUBSTEPS} meets the dynamic budget; prefactored implicit Euler at {} s",
-                crate::io::num(dt)
-            )),
-        ),
+        None => {
+            // The budget is out of reach: the fewest prefactored substeps the tool allows.
+            let stable = |k: &usize| limit.auto_allows(Integrator::Prefactored, dt / *k as f64);
+            let Some(k) = (1..=MAX_AUTO_SUBSTEPS).find(stable) else {
+                let h = dt / MAX_AUTO_SUBSTEPS as f64;
+                return Err(limit.refusal(Integrator::Prefactored, h).unwrap_or_default());
+            };
+            let h = dt / k as f64;
+            (
+                Integrator::Prefactored,
+                h,
+                Some(format!(
+                    "no step down to dt / {MAX_AUTO_SUBSTEPS} meets the dynamic budget; prefactored implicit Euler at \
+                     {} s",
+                    crate::io::num(h)
+                )),
+            )
+        }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::tool::drag_dt_limit;
+
+    /// The dragging spring is in the choice: a step the tissue alone allows but the spring on a
+    /// light node does not is substepped automatically, and refused by name when asked for.
+    #[test]
+    fn the_drag_spring_bounds_every_integrator() {
+        let tool = drag_dt_limit(3.6e-4);
+        assert!(tool > 1e-4 && tool < 1e-3, "{tool}");
+        let limit = StepLimit { tissue: 6e-4, tool };
+        let damping = Damping::Ratio { zeta: 0.2, omega_1: 90.0 };
+        let (i, h, _) = choose_step(None, 1e-3, limit, damping, DEFAULT_DYNAMIC_BUDGET).expect("auto substeps");
+        assert!(h <= MAX_EXPLICIT_FRACTION * limit.of(i), "{i:?} at {h}");
+        for named in [Integrator::Symplectic, Integrator::Prefactored, Integrator::Implicit] {
+            let why = choose_step(Some(named), 1e-3, limit, damping, DEFAULT_DYNAMIC_BUDGET).expect_err("refused");
+            assert!(why.contains("s is above"), "{why}");
+        }
+        let why = StepLimit { tissue: 1.0, tool }.refusal(Integrator::Prefactored, 1e-3).expect("refused");
+        assert!(why.contains("dragging spring"), "{why}");
+        // Without a tool the implicit schemes have no limit.
+        assert!(StepLimit::tissue(1e-5).refusal(Integrator::Prefactored, 1.0).is_none());
+        assert_eq!(StepLimit::tissue(1e-5).of(Integrator::Symplectic), 1e-5);
+    }
 }

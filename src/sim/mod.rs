@@ -23,10 +23,10 @@ pub mod tool;
 pub use fem_tissue::FemTissue;
 pub use integrator::{
     AUTO_EXPLICIT_FRACTION, DEFAULT_DYNAMIC_BUDGET, DynamicBudget, Integrator, MAX_AUTO_SUBSTEPS,
-    MAX_EXPLICIT_FRACTION, choose_integrator, choose_step, predicted_error,
+    MAX_EXPLICIT_FRACTION, StepLimit, choose_integrator, choose_step, predicted_error,
 };
 pub use model::Model;
 pub use msm_tissue::{MsmTissue, explicit_dt_limit};
-pub use simulation::{BlowUp, DRAG_STIFFNESS, MAX_RECOVERIES, Simulation};
+pub use simulation::{BlowUp, MAX_RECOVERIES, Simulation};
 pub use tissue::Tissue;
-pub use tool::Tool;
+pub use tool::{DRAG_DAMPING, DRAG_STIFFNESS, Tool, drag_dt_limit};

@@ -57,6 +57,9 @@ impl Tissue for MsmTissue {
     fn total_mass(&self) -> f64 {
         self.model.masses.iter().sum()
     }
+    fn node_mass(&self, p: usize) -> f64 {
+        self.model.masses[p]
+    }
     fn x(&self) -> &[Vec<f64>; 3] {
         &self.dynamics.x
     }

@@ -1,17 +1,13 @@
 //! The running tissue: any [`Tissue`] model stepped at a fixed time step under the step policy,
 //! with the user's tools and a blow-up guard.
 
-use super::integrator::{DEFAULT_DYNAMIC_BUDGET, Integrator, choose_step};
+use super::integrator::{DEFAULT_DYNAMIC_BUDGET, Integrator, StepLimit, choose_step};
 use super::msm_tissue::MsmTissue;
 use super::tissue::Tissue;
-use super::tool::Tool;
+use super::tool::{DRAG_DAMPING, DRAG_STIFFNESS, Tool, drag_dt_limit};
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::msm::{MsmModel, MsmParams};
 use glam::DVec3;
-
-/// Stiffness of the dragging spring, N/m, and its damping, N s/m.
-pub const DRAG_STIFFNESS: f64 = 1000.0;
-const DRAG_DAMPING: f64 = 1.0;
 
 /// What a blow-up looked like, and what to change.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,6 +44,8 @@ pub struct Simulation {
     requested: Option<Integrator>,
     /// The step asked for, s (the automatic choice may run substeps of it).
     requested_dt: f64,
+    /// The nodes a drag may hold (`None`: any free node), whose lightest bounds the step.
+    draggable: Option<Vec<usize>>,
     /// Time step, s.
     pub dt: f64,
     /// The active tool.
@@ -91,6 +89,7 @@ impl Simulation {
             integrator,
             requested: Some(integrator),
             requested_dt: dt,
+            draggable: None,
             dt,
             tool: Tool::None,
             time_s: 0.0,
@@ -113,13 +112,38 @@ impl Simulation {
         self.tissue.explicit_dt_limit()
     }
 
+    /// The limits the step policy respects: the tissue's, and the dragging spring's on the
+    /// lightest node a drag may hold.
+    pub fn limit(&self) -> StepLimit {
+        let free = self.tissue.free();
+        let mass = |p: usize| if free[p] == 0.0 { f64::INFINITY } else { self.tissue.node_mass(p) };
+        let lightest = match &self.draggable {
+            Some(nodes) => nodes.iter().map(|&p| mass(p)).fold(f64::INFINITY, f64::min),
+            None => (0..free.len()).map(mass).fold(f64::INFINITY, f64::min),
+        };
+        let tool = if lightest.is_finite() { drag_dt_limit(lightest) } else { f64::INFINITY };
+        StepLimit { tissue: self.dt_limit(), tool }
+    }
+
+    /// Restricts the drag to `nodes` (a script's, known before it runs; by default any free node
+    /// may be held) and applies the step policy again (what it says, or why it refuses).
+    pub fn set_draggable(&mut self, nodes: Vec<usize>) -> Result<Option<String>, String> {
+        self.draggable = Some(nodes);
+        choose_step(self.requested, self.requested_dt, self.limit(), self.tissue.damping(), DEFAULT_DYNAMIC_BUDGET).map(
+            |(i, h, note)| {
+                (self.integrator, self.dt) = (i, h);
+                note
+            },
+        )
+    }
+
     /// Sets the integrator and step by [`choose_step`] (the automatic choice meets
     /// the viewer's dynamic budget ([`DEFAULT_DYNAMIC_BUDGET`])); on a refusal switches to prefactored implicit Euler and says so.
     /// The request is kept: new parameters or damping apply the policy again.
     pub fn set_integrator(&mut self, requested: Option<Integrator>, dt: f64) -> Option<String> {
         self.requested = requested;
         self.requested_dt = dt;
-        match choose_step(requested, dt, self.dt_limit(), self.tissue.damping(), DEFAULT_DYNAMIC_BUDGET) {
+        match choose_step(requested, dt, self.limit(), self.tissue.damping(), DEFAULT_DYNAMIC_BUDGET) {
             Ok((i, h, note)) => {
                 (self.integrator, self.dt) = (i, h);
                 note
@@ -202,26 +226,7 @@ impl Simulation {
             }
             return Ok(());
         }
-        let limit = self.dt_limit();
-        let dragging = matches!(self.tool, Tool::Drag { .. });
-        let message = match (stepped, self.integrator, unhealthy) {
-            (Err(e), _, _) => format!("the implicit solve failed ({e}); the state was reset"),
-            (Ok(()), Integrator::Symplectic, _) if self.dt > limit => format!(
-                "diverged: symplectic Euler with dt = {:.3e} s is above its stability limit of about {limit:.3e} s \
-                 for this stiffness; the state was reset. Lower dt or choose the implicit integrator.",
-                self.dt
-            ),
-            (Ok(()), _, Some(Unhealthy::OutsideCube)) if dragging => "the dragged node was pulled more than the \
-                 cube's side (0.1 m) from rest; the state was reset. Keep the drag target near the cube (positions \
-                 are in metres)."
-                .to_owned(),
-            (Ok(()), _, Some(Unhealthy::OutsideCube)) => "a node moved more than the cube's side (0.1 m) from rest; \
-                 the state was reset. Lower the loads or dt, or choose the implicit integrator."
-                .to_owned(),
-            (Ok(()), _, _) => "diverged (non-finite or runaway energy); the state was reset. Lower dt, soften the \
-                            tool, or choose the implicit integrator."
-                .to_owned(),
-        };
+        let message = self.diagnose(stepped, unhealthy);
         let time_s = self.time_s;
         if time_s > self.last_blow_up_s {
             self.last_blow_up_s = time_s;
@@ -240,6 +245,47 @@ impl Simulation {
             message
         };
         Err(BlowUp { time_s, message, fatal })
+    }
+
+    /// What went wrong in a step that failed or left the state unhealthy, and what to change.
+    fn diagnose(&self, stepped: Result<(), String>, unhealthy: Option<Unhealthy>) -> String {
+        let limit = self.dt_limit();
+        let dt = crate::io::num(self.dt);
+        if let Err(e) = stepped {
+            return format!("the implicit solve failed ({e}); the state was reset");
+        }
+        if self.integrator == Integrator::Symplectic && self.dt > limit {
+            return format!(
+                "diverged: symplectic Euler with dt = {dt} s is above its stability limit of about {} s for this \
+                 stiffness; the state was reset. Lower dt or choose the implicit integrator.",
+                crate::io::num(limit)
+            );
+        }
+        if let Tool::Drag { node, target } = self.tool {
+            let spring = drag_dt_limit(self.tissue.node_mass(node));
+            if self.dt > spring {
+                return format!(
+                    "diverged: the dragging spring ({DRAG_STIFFNESS} N/m, {DRAG_DAMPING} N s/m) on node {node} is \
+                     stable only below about {} s, and dt = {dt} s; the state was reset. Lower dt, or leave the \
+                     integrator to the automatic choice, which takes the spring into account.",
+                    crate::io::num(spring)
+                );
+            }
+            let reach = DVec3::from(target).distance(DVec3::from(std::array::from_fn(|c| self.rest[c][node])));
+            if unhealthy == Some(Unhealthy::OutsideCube) && reach > crate::mechanics::grid::CUBE_SIDE_M {
+                return "the dragged node was pulled more than the cube's side (0.1 m) from rest; the state was \
+                        reset. Keep the drag target near the cube (positions are in metres)."
+                    .to_owned();
+            }
+        }
+        match unhealthy {
+            Some(Unhealthy::OutsideCube) => "a node moved more than the cube's side (0.1 m) from rest; the state was \
+                 reset. Lower the loads or dt, or choose the implicit integrator."
+                .to_owned(),
+            _ => "diverged (non-finite or runaway energy); the state was reset. Lower dt, soften the tool, or choose \
+                  the implicit integrator."
+                .to_owned(),
+        }
     }
 
     fn restore(&mut self) {
@@ -268,8 +314,16 @@ impl Simulation {
         if !finite {
             return Some(Unhealthy::NonFinite);
         }
+        // A cube held nowhere may move as a whole (a drag carries it along): its mean
+        // displacement is motion, not deformation.
+        let held = self.tissue.free().iter().any(|&f| f == 0.0);
         for c in 0..3 {
-            if x[c].iter().zip(&self.rest[c]).any(|(x, r)| (x - r).abs() > l) {
+            let shift = if held {
+                0.0
+            } else {
+                x[c].iter().zip(&self.rest[c]).map(|(x, r)| x - r).sum::<f64>() / x[c].len() as f64
+            };
+            if x[c].iter().zip(&self.rest[c]).any(|(x, r)| (x - r - shift).abs() > l) {
                 return Some(Unhealthy::OutsideCube);
             }
         }

@@ -19,6 +19,8 @@ pub trait Tissue: Send + std::fmt::Debug {
     fn grid(&self) -> Grid;
     /// Mass of the whole cube, kg.
     fn total_mass(&self) -> f64;
+    /// Lumped mass of node `p`, kg.
+    fn node_mass(&self, p: usize) -> f64;
     /// Positions, metres.
     fn x(&self) -> &[Vec<f64>; 3];
     /// Positions, for tools and the guard to write.

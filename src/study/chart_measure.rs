@@ -13,6 +13,7 @@ use crate::mechanics::fem::dynamics::{FemDynamics, Formulation};
 use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{Dynamics, MsmModel, MsmParams, Topology, statics};
+use crate::response::single_mode::damped_explicit_limit;
 use crate::sim::shipped::tissue_params;
 use crate::sim::{Integrator, Model};
 use crate::study::timing::{time_fallible, time_per_call};
@@ -362,40 +363,12 @@ fn corotational_static(
     anyhow::bail!("corotational static solve of {} did not converge", case.id)
 }
 
-/// The stability limit of symplectic Euler on a mode `omega` with damping rate `gamma` (1/s)
-/// treated explicitly: the one-step matrix has determinant `1 - h gamma` and trace
-/// `2 - h gamma - h^2 omega^2`, stable while `h^2 omega^2 + 2 h gamma < 4`, i.e.
-/// `h < 4 / (gamma + sqrt(gamma^2 + 4 omega^2))` (`2 / omega` undamped).
-pub fn damped_explicit_limit(omega: f64, gamma: f64) -> f64 {
-    4.0 / (gamma + (gamma * gamma + 4.0 * omega * omega).sqrt())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Symplectic Euler with explicit damping on one mode, `n` steps of `h` from `x = 1`.
-    fn grows(omega: f64, gamma: f64, h: f64) -> bool {
-        let (mut x, mut v) = (1.0f64, 0.0f64);
-        for _ in 0..20_000 {
-            v += h * (-omega * omega * x - gamma * v);
-            x += h * v;
-        }
-        x.is_nan() || x.abs() > 1e3 // NaN after an overflow counts as growth
-    }
-
     #[test]
     fn sample_points_are_the_4_cubed_nodes() {
         assert_eq!(sample_points(), Grid::new(4).unwrap().positions());
-    }
-
-    #[test]
-    fn damped_limit_separates_stable_from_unstable_steps() {
-        for (omega, gamma) in [(1000.0, 0.0), (990.0, 425.0), (300.0, 2000.0)] {
-            let h = damped_explicit_limit(omega, gamma);
-            assert!(!grows(omega, gamma, 0.99 * h), "omega {omega} gamma {gamma}: 0.99 h grows");
-            assert!(grows(omega, gamma, 1.01 * h), "omega {omega} gamma {gamma}: 1.01 h is stable");
-        }
-        assert!((damped_explicit_limit(1000.0, 0.0) - 2e-3).abs() < 1e-15);
     }
 }

@@ -84,7 +84,7 @@ pub struct ChartPoint {
     pub integrator: Integrator,
     /// Wall time of one step, s.
     pub step_s: f64,
-    /// Largest stable explicit step ([`damped_explicit_limit`] of `omega_max` and the damping rate), s;
+    /// Largest stable explicit step (`damped_explicit_limit` of `omega_max` and the damping rate), s;
     /// infinite for implicit.
     pub dt_max_s: f64,
     /// The time step of the point, s: 0.9 of `dt_max_s` (explicit), or one of

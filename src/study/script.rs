@@ -34,7 +34,7 @@ use serde::{Deserialize, Serialize};
 use crate::mechanics::cases::{LoadCase, parse_case_id};
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
-use crate::sim::{Integrator, Model, Simulation, Tool, choose_integrator};
+use crate::sim::{Integrator, Model, Simulation, Tool};
 
 /// A script.
 #[derive(Debug, Clone, Deserialize)]
@@ -183,8 +183,12 @@ pub struct Outcome {
     pub model: Model,
     /// Integrator used.
     pub integrator: Integrator,
-    /// Time step, s.
+    /// Time step used, s: the script's `dt`, or a substep of it that the automatic choice took
+    /// (as the viewer's physics does), said in `note`.
     pub dt: f64,
+    /// What the step policy said, if anything.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
     /// Nodes per axis.
     pub nodes_per_axis: usize,
     /// Steps taken.
@@ -247,7 +251,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     let grid = Grid::paper();
     let material = Material::preset(&script.object)
         .ok_or_else(|| anyhow::anyhow!("script: object must be A or B, got {:?}", script.object))?;
-    check_bounds(script)?;
+    check_script(script)?;
     if script.damping_ratio.is_some() && !script.model.takes_damping_ratio() {
         anyhow::bail!(
             "script: \"damping_ratio\" is not for the axis lattice: {}",
@@ -256,17 +260,22 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     }
     let zeta = script.damping_ratio.unwrap_or(crate::response::damping::DEFAULT_DAMPING_RATIO);
     let tissue = script.model.build(&material, None, zeta).map_err(|e| anyhow::anyhow!("script: {e:#}"))?;
-    let integrator = choose_integrator(script.integrator, script.dt, tissue.explicit_dt_limit()).map_err(|why| {
-        anyhow::anyhow!("script: {why}; lower dt, or choose \"integrator\": \"prefactored\" (or leave it out)")
-    })?;
     let case = clamp_case(&grid, &material.name, &script.clamp)?;
-    let mut sim = Simulation::with_tissue(tissue, integrator, script.dt, case.as_ref());
+    let mut sim = Simulation::with_tissue(tissue, Integrator::Symplectic, script.dt, case.as_ref());
+    // The viewer's step policy, with the script's drags in it: refused before the first step.
+    sim.set_integrator(script.integrator, script.dt);
+    let note = sim.set_draggable(drag_nodes(script)).map_err(|why| {
+        anyhow::anyhow!("script: {why}; lower dt, or leave \"integrator\" out (the automatic choice substeps dt)")
+    })?;
+    let integrator = sim.integrator;
+    check_steps(script, sim.dt)?;
     let rest = grid.positions();
     let mut out = Outcome {
         object: material.name.clone(),
         model: script.model,
         integrator,
-        dt: script.dt,
+        dt: sim.dt,
+        note,
         nodes_per_axis: grid.n(),
         steps: 0,
         events: Vec::new(),
@@ -275,7 +284,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     };
     let last = script.actions.len().saturating_sub(1);
     for (i, action) in script.actions.iter().enumerate() {
-        let kind = run_action(script.dt, i, action, &mut sim, &mut out)?;
+        let kind = run_action(i, action, &mut sim, &mut out)?;
         let x = sim.tissue.x();
         let position = |p: usize| -> [f64; 3] { std::array::from_fn(|c| x[c][p]) };
         let max_displacement_m = rest
@@ -299,55 +308,114 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     Ok(out)
 }
 
-/// Steps of an action lasting `d` seconds at `dt`.
-fn steps_for(d: f64, dt: f64) -> anyhow::Result<u64> {
-    check("duration_s", d, false)?;
-    if d > 100.0 {
-        anyhow::bail!("script: duration_s = {d} s is too long (at most 100 s)");
-    }
-    let steps = (d / dt).round();
-    if steps > 1e7 {
-        anyhow::bail!("script: duration_s = {d} s at dt = {dt} s is more than 1e7 steps");
-    }
-    Ok(steps as u64)
+/// Longest action, s.
+pub const MAX_ACTION_S: f64 = 100.0;
+
+/// Steps of an action lasting `d` seconds at `dt` (both checked).
+fn steps_for(d: f64, dt: f64) -> u64 {
+    (d / dt).round() as u64
 }
 
-/// The bounds on the whole script, checked before any work.
-fn check_bounds(script: &Script) -> anyhow::Result<()> {
+/// Probe samples of one probe action.
+pub const MAX_SAMPLES_PER_PROBE: usize = 10_000;
+
+/// Every check of a script that does not depend on the step, made before any work: the step, the
+/// bounds on actions and recorded events, and each action's node, points, sizes and samples.
+fn check_script(script: &Script) -> anyhow::Result<()> {
     check("dt", script.dt, true)?;
     if !(1e-6..=0.05).contains(&script.dt) {
-        anyhow::bail!("script: dt = {} s is out of range (1e-6 to 0.05 s)", script.dt);
+        anyhow::bail!("script: dt = {} s is out of range (1e-6 to 0.05 s)", crate::io::num(script.dt));
     }
     if script.actions.len() > MAX_ACTIONS {
         anyhow::bail!("script: {} actions, above the bound of {MAX_ACTIONS}", script.actions.len());
     }
-    let recorded = script.actions.iter().filter(|a| a.record()).count() + 1;
+    let last = script.actions.len().saturating_sub(1);
+    let recorded = script.actions.iter().enumerate().filter(|&(i, a)| a.record() || i == last).count();
     if recorded > MAX_RECORDED {
-        anyhow::bail!("script: {recorded} actions record positions, above the bound of {MAX_RECORDED}");
+        anyhow::bail!("script: {recorded} actions record positions (with the last), above the bound of {MAX_RECORDED}");
     }
-    let mut total_steps = 0u64;
     let mut total_samples = 0usize;
     for (i, a) in script.actions.iter().enumerate() {
-        let n = steps_for(a.duration_s(), script.dt).map_err(|e| anyhow::anyhow!("action {i}: {e}"))?;
-        total_steps += match a {
-            Action::Release { .. } => 0,
-            Action::Wait { .. } => n,
-            _ => n.max(1),
-        };
+        check_action(a).map_err(|e| anyhow::anyhow!("script: action {i}: {e}"))?;
         if let Action::Probe { samples, .. } = a {
-            total_samples += (*samples).clamp(1, 10_000);
+            total_samples += samples;
         }
-    }
-    if total_steps > MAX_TOTAL_STEPS {
-        anyhow::bail!(
-            "script: {total_steps} steps in all (at dt = {} s), above the bound of {MAX_TOTAL_STEPS} steps per script",
-            script.dt
-        );
     }
     if total_samples > MAX_SAMPLES {
         anyhow::bail!("script: {total_samples} probe samples in all, above the bound of {MAX_SAMPLES}");
     }
     Ok(())
+}
+
+/// One action's node, points, sizes, duration and samples.
+fn check_action(action: &Action) -> anyhow::Result<()> {
+    let l = crate::mechanics::grid::CUBE_SIDE_M;
+    check("duration_s", action.duration_s(), false)?;
+    if action.duration_s() > MAX_ACTION_S {
+        anyhow::bail!("duration_s = {} s is too long (at most {MAX_ACTION_S} s)", crate::io::num(action.duration_s()));
+    }
+    match action {
+        Action::Drag { node, to, .. } => {
+            let nodes = Grid::paper().num_nodes();
+            if *node >= nodes {
+                anyhow::bail!("node {node} does not exist (0..{nodes})");
+            }
+            check_point("drag target \"to\"", to)
+        }
+        Action::Probe { at, direction, radius, depth, samples, .. } => {
+            check("radius", *radius, true)?;
+            check("depth", *depth, false)?;
+            if *radius > l || *depth > l {
+                anyhow::bail!(
+                    "probe radius {} m and depth {} m must each be at most the cube's side ({l} m); sizes are metres",
+                    crate::io::num(*radius),
+                    crate::io::num(*depth)
+                );
+            }
+            check_point("probe point \"at\"", at)?;
+            let len = DVec3::from(*direction).length();
+            if !(len.is_finite() && len > 0.0) {
+                anyhow::bail!("probe needs a finite, non-zero direction");
+            }
+            if !(1..=MAX_SAMPLES_PER_PROBE).contains(samples) {
+                anyhow::bail!("samples = {samples} is out of range (1 to {MAX_SAMPLES_PER_PROBE} per probe)");
+            }
+            Ok(())
+        }
+        Action::Release { .. } | Action::Wait { .. } => Ok(()),
+    }
+}
+
+/// The steps of the whole script at the step `dt` the policy chose, within [`MAX_TOTAL_STEPS`].
+fn check_steps(script: &Script, dt: f64) -> anyhow::Result<()> {
+    let mut total_steps = 0u64;
+    for a in &script.actions {
+        let n = steps_for(a.duration_s(), dt);
+        total_steps += match a {
+            Action::Release { .. } => 0,
+            Action::Wait { .. } => n,
+            _ => n.max(1),
+        };
+    }
+    if total_steps > MAX_TOTAL_STEPS {
+        anyhow::bail!(
+            "script: {total_steps} steps in all (at dt = {} s), above the bound of {MAX_TOTAL_STEPS} steps per script",
+            crate::io::num(dt)
+        );
+    }
+    Ok(())
+}
+
+/// The nodes the script's drags hold.
+fn drag_nodes(script: &Script) -> Vec<usize> {
+    script
+        .actions
+        .iter()
+        .filter_map(|a| match a {
+            Action::Drag { node, .. } => Some(*node),
+            _ => None,
+        })
+        .collect()
 }
 
 /// The fixed nodes and loads a script's `clamp` names.
@@ -368,23 +436,13 @@ fn clamp_case(grid: &Grid, object: &str, clamp: &str) -> anyhow::Result<Option<L
     })
 }
 
-/// Runs action `i`; returns its kind.
-fn run_action(
-    dt: f64,
-    i: usize,
-    action: &Action,
-    sim: &mut Simulation,
-    out: &mut Outcome,
-) -> anyhow::Result<&'static str> {
+/// Runs action `i` (checked by [`check_script`]); returns its kind.
+fn run_action(i: usize, action: &Action, sim: &mut Simulation, out: &mut Outcome) -> anyhow::Result<&'static str> {
+    let n = steps_for(action.duration_s(), sim.dt);
     match action {
-        Action::Drag { node, to, duration_s, .. } => {
-            let nodes = sim.tissue.grid().num_nodes();
-            if *node >= nodes {
-                anyhow::bail!("script: action {i}: node {node} does not exist (0..{nodes})");
-            }
-            check_point(&format!("action {i}: drag target \"to\""), to)?;
+        Action::Drag { node, to, .. } => {
             let from: [f64; 3] = std::array::from_fn(|c| sim.tissue.x()[c][*node]);
-            let n = steps_for(*duration_s, dt)?.max(1);
+            let n = n.max(1);
             for s in 1..=n {
                 let f = s as f64 / n as f64;
                 sim.tool = Tool::Drag { node: *node, target: std::array::from_fn(|c| from[c] + f * (to[c] - from[c])) };
@@ -392,8 +450,8 @@ fn run_action(
             }
             Ok("drag")
         }
-        Action::Probe { at, direction, radius, depth, duration_s, samples, .. } => {
-            probe(dt, i, (*at, *direction, *radius, *depth), *duration_s, *samples, sim, out)?;
+        Action::Probe { at, direction, radius, depth, samples, .. } => {
+            probe(i, (*at, *direction, *radius, *depth), n.max(1), *samples as u64, sim, out)?;
             Ok("probe")
         }
         Action::Release { .. } => {
@@ -401,8 +459,8 @@ fn run_action(
             sim.tool_force = [0.0; 3];
             Ok("release")
         }
-        Action::Wait { duration_s, .. } => {
-            for _ in 0..steps_for(*duration_s, dt)? {
+        Action::Wait { .. } => {
+            for _ in 0..n {
                 step(sim, out)?;
             }
             Ok("wait")
@@ -410,43 +468,25 @@ fn run_action(
     }
 }
 
-/// A probe action: `(at, direction, radius, depth)` in metres.
+/// A probe action `i`: `(at, direction, radius, depth)` in metres, over `n` steps, `samples`
+/// force samples.
 fn probe(
-    dt: f64,
     i: usize,
     (at, direction, radius, depth): ([f64; 3], [f64; 3], f64, f64),
-    duration_s: f64,
-    samples: usize,
+    n: u64,
+    samples: u64,
     sim: &mut Simulation,
     out: &mut Outcome,
 ) -> anyhow::Result<()> {
-    check("radius", radius, true)?;
-    check("depth", depth, false)?;
-    let l = crate::mechanics::grid::CUBE_SIDE_M;
-    if radius > l || depth > l {
-        anyhow::bail!(
-            "script: action {i}: probe radius {} m and depth {} m must each be at most the cube's side ({l} m); \
-             sizes are metres",
-            crate::io::num(radius),
-            crate::io::num(depth)
-        );
-    }
-    check_point(&format!("action {i}: probe point \"at\""), &at)?;
     let len = DVec3::from(direction).length();
-    if !(len.is_finite() && len > 0.0) {
-        anyhow::bail!("script: action {i}: probe needs a finite, non-zero direction");
-    }
     let dir = direction.map(|d| d / len);
-    let n = steps_for(duration_s, dt)?.max(1);
-    let samples = samples.clamp(1, 10_000) as u64;
     for s in 1..=n {
         let d = depth * s as f64 / n as f64;
         let centre = std::array::from_fn(|c| at[c] - radius * dir[c] + d * dir[c]);
         sim.tool = Tool::Probe { centre, radius };
         step(sim, out)?;
         if s * samples % n < samples {
-            let f = sim.tool_force;
-            let along = -(DVec3::from(f).dot(DVec3::from(dir)));
+            let along = -(DVec3::from(sim.tool_force).dot(DVec3::from(dir)));
             out.force_depth.push(ProbeSample { action: i, depth_m: d, force_n: along });
         }
     }
