@@ -23,6 +23,42 @@ pub fn num(v: f64) -> String {
     }
 }
 
+/// Longest quoted text a message repeats, characters.
+const MAX_QUOTED_CHARS: usize = 60;
+
+/// A message as one brief line: line breaks and runs of blanks become single spaces, and any
+/// quoted text (between `"`, `'` or backquotes) longer than [`MAX_QUOTED_CHARS`] is cut, saying
+/// how long it was, so that a 100,000-character input comes back as a short error.
+pub fn brief_line(message: &str) -> String {
+    let mut words = String::with_capacity(message.len().min(4096));
+    for w in message.split_whitespace() {
+        if !words.is_empty() {
+            words.push(' ');
+        }
+        words.push_str(w);
+    }
+    let mut out = String::with_capacity(words.len().min(4096));
+    let mut rest = words.as_str();
+    while let Some(start) = rest.find(['"', '\'', '`']) {
+        let quote = rest[start..].chars().next().unwrap_or('"');
+        let body = &rest[start + 1..];
+        let Some(len) = body.find(quote) else { break };
+        out.push_str(&rest[..=start]);
+        let quoted = &body[..len];
+        let chars = quoted.chars().count();
+        if chars > MAX_QUOTED_CHARS {
+            out.extend(quoted.chars().take(MAX_QUOTED_CHARS / 2));
+            out.push_str(&format!("... ({chars} characters)"));
+        } else {
+            out.push_str(quoted);
+        }
+        out.push(quote);
+        rest = &body[len + 1..];
+    }
+    out.push_str(rest);
+    out
+}
+
 /// Largest file any command writes, bytes: a bound no input can exceed (a result over it is an
 /// error naming the bound, and nothing is written).
 pub const MAX_OUTPUT_BYTES: usize = 256 << 20;
@@ -104,6 +140,43 @@ fn resolve(path: &Path) -> anyhow::Result<Target> {
     bail!("cannot write {}: too many levels of symbolic links", path.display())
 }
 
+/// Checks, before any work, that `path` can be written as [`write_atomic`] will: standard output,
+/// a special file, or a regular file (new or replaceable) in an existing directory.
+pub fn check_output(path: &Path) -> anyhow::Result<()> {
+    match resolve(path)? {
+        Target::Stdout | Target::Special(_) => Ok(()),
+        Target::Regular(target) => check_regular(path, &target).map(|_| ()),
+    }
+}
+
+/// The checks on a regular output file `target` (written as `path`): a replaced file must be
+/// writable, a new one needs an existing directory. Its metadata, if it exists, and its directory.
+fn check_regular<'a>(path: &Path, target: &'a Path) -> anyhow::Result<(Option<std::fs::Metadata>, &'a Path)> {
+    use anyhow::{Context as _, bail};
+    let existing = match std::fs::metadata(target) {
+        Ok(m) => Some(m),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+        Err(e) => return Err(e).with_context(|| format!("cannot write {}", path.display())),
+    };
+    if let Some(m) = &existing {
+        if m.permissions().readonly() {
+            bail!("refusing to overwrite {}: the file is write-protected", path.display());
+        }
+        // Permission to write the file itself, not only its directory.
+        if let Err(e) = std::fs::OpenOptions::new().write(true).open(target) {
+            return Err(e).with_context(|| format!("cannot overwrite {}", path.display()));
+        }
+    }
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        bail!("cannot write {}: the directory {} does not exist", path.display(), dir.display());
+    }
+    Ok((existing, dir))
+}
+
 /// Writes `bytes` to `path` without ever damaging what `path` names:
 /// - `-` writes to standard output; a device, fifo or socket (`/dev/null`, say), and a
 ///   descriptor alias (`/dev/stdout`, `/dev/fd/N`), is opened and written in place;
@@ -125,7 +198,17 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     }
     let target = match resolve(path)? {
         Target::Stdout => {
-            let mut out = std::io::stdout().lock();
+            // Through a duplicate of the descriptor: the standard handle reports success on a
+            // closed descriptor (EBADF), which would lose the output without a word.
+            let stdout = std::io::stdout();
+            #[cfg(unix)]
+            let (_lock, mut out) = {
+                use std::os::fd::AsFd as _;
+                let fd = stdout.as_fd().try_clone_to_owned().context("cannot write to standard output")?;
+                (stdout.lock(), std::fs::File::from(fd))
+            };
+            #[cfg(not(unix))]
+            let mut out = stdout.lock();
             out.write_all(bytes).and_then(|()| out.flush()).context("cannot write to standard output")?;
             return Ok(());
         }
@@ -139,24 +222,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         }
         Target::Regular(p) => p,
     };
-    let existing = match std::fs::metadata(&target) {
-        Ok(m) => Some(m),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-        Err(e) => return Err(e).with_context(|| format!("cannot write {}", path.display())),
-    };
-    if let Some(m) = &existing {
-        if m.permissions().readonly() {
-            bail!("refusing to overwrite {}: the file is write-protected", path.display());
-        }
-        // Permission to write the file itself, not only its directory.
-        if let Err(e) = std::fs::OpenOptions::new().write(true).open(&target) {
-            return Err(e).with_context(|| format!("cannot overwrite {}", path.display()));
-        }
-    }
-    let dir = match target.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    let (existing, dir) = check_regular(path, &target)?;
     let mut builder = tempfile::Builder::new();
     builder.prefix(".tissue-sim-").suffix(".tmp");
     #[cfg(unix)]
@@ -341,6 +407,17 @@ mod tests {
         for v in [1e308, -1e-300, 1.0 / 3.0, 6.02e23, 5e-324] {
             assert!(num(v).len() <= 10, "{v}: {}", num(v));
         }
+    }
+
+    /// Messages come back on one short line, whatever was quoted in them.
+    #[test]
+    fn messages_are_brief_lines() {
+        let long = "x".repeat(100_000);
+        let m = brief_line(&format!("unknown object \"{long}\":\n  the presets   are A and B"));
+        assert!(m.len() < 200, "{m}");
+        assert!(m.starts_with("unknown object \"xxx") && m.ends_with("characters)\": the presets are A and B"), "{m}");
+        assert_eq!(brief_line("a `b` 'c' \"d\" e"), "a `b` 'c' \"d\" e");
+        assert_eq!(brief_line("it's \"open"), "it's \"open");
     }
 
     /// What a signal handler removes: the temporary files and directories still in flight.

@@ -16,6 +16,14 @@ pub enum ParamError {
         /// What is required.
         why: &'static str,
     },
+    /// A parameter the topology needs is missing.
+    #[error("MSM parameter {name} is missing: {why}")]
+    Missing {
+        /// Parameter name, e.g. `c23`.
+        name: &'static str,
+        /// What is required.
+        why: &'static str,
+    },
 }
 
 /// Which springs the lattice has.
@@ -119,6 +127,15 @@ impl MsmParams {
             {
                 return bad(name, v, "a diagonal stiffness must be 0 or a finite number from 1e-6 to 1e10 N/m");
             }
+        }
+        let diagonals = [("c12", self.c12), ("c13", self.c13), ("c23", self.c23)];
+        if diagonals.iter().any(|(_, v)| v.is_some())
+            && let Some((name, _)) = diagonals.iter().find(|(_, v)| v.is_none())
+        {
+            return Err(ParamError::Missing {
+                name,
+                why: "the shear and hex lattices (face diagonals) need all of c12, c13 and c23",
+            });
         }
         if let Some(b) = self.b
             && (self.c12.is_none() || self.c13.is_none() || self.c23.is_none())

@@ -1,0 +1,224 @@
+//! Hostile but fair input, one test per class: every input bounded and checked before the work
+//! starts, every failure one line that names its cause, nothing left behind.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tissue-sim"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Fails with exit code 1 and one short line that contains `needle`, within `seconds`.
+fn refused(args: &[&str], needle: &str, seconds: f64) -> String {
+    let t = Instant::now();
+    let o = run(args);
+    let took = t.elapsed().as_secs_f64();
+    let msg = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{args:?} should exit 1: {msg}");
+    assert_eq!(msg.trim_end().lines().count(), 1, "{args:?}: one line: {msg}");
+    assert!(msg.len() < 600, "{args:?}: a brief line, not {} bytes", msg.len());
+    assert!(msg.contains(needle), "{args:?}: {msg}");
+    assert!(!msg.contains("panicked"), "{args:?}: {msg}");
+    assert!(took < seconds, "{args:?} took {took:.1} s before failing");
+    msg
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).expect("write");
+    p
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf8")
+}
+
+fn script(actions: &str, extra: &str) -> String {
+    format!(r#"{{"object":"A"{extra},"actions":[{actions}]}}"#)
+}
+
+/// Class: an input file of any kind (material, script, parameters, chart) is read through one
+/// bounded path: an endless device or an oversized file is refused at the bound, quickly.
+#[test]
+fn every_input_file_is_bounded() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = dir.path().join("o.json");
+    let big = dir.path().join("big.toml");
+    std::fs::write(&big, format!("symmetry = \"orthotropic\"\n# {}\n", "x".repeat(20 << 20))).expect("write");
+    for input in ["/dev/zero", s(&big)] {
+        refused(&["fem", "--material", input, "--out", s(&o)], "bound", 2.0);
+        refused(&["calibrate", "--material", input, "--out", s(&o)], "bound", 2.0);
+        refused(&["simulate", "--script", input, "--out", s(&o)], "bound", 2.0);
+        refused(&["errors", "--params", input], "bound", 2.0);
+        refused(&["choose", "--chart", input], "bound", 2.0);
+    }
+    assert!(!o.exists());
+}
+
+/// Class: the tools are in the step choice. The README's script at the viewer's FEM step (1 ms)
+/// runs for every model under the automatic choice; an integrator asked for by name that the
+/// dragging spring cannot take is refused before the first step, naming the spring. A drag of an
+/// unclamped cube carries it along without a blow-up.
+#[test]
+fn every_allowed_script_runs_or_is_refused_with_the_true_reason() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let example = std::fs::read_to_string("assets/examples/interaction.json").expect("example");
+    let out = dir.path().join("out.json");
+    for model in ["hex", "shear", "fem-linear", "fem-corotational"] {
+        let text = example.replace("\"dt\": 1e-4", "\"dt\": 1e-3").replace("\"hex\"", &format!("\"{model}\""));
+        let p = write(dir.path(), "s.json", &text);
+        let o = run(&["simulate", "--script", s(&p), "--out", s(&out)]);
+        assert!(o.status.success(), "{model} at 1 ms: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).expect("out")).expect("json");
+        assert_eq!(v["blow_ups"].as_array().map(Vec::len), Some(0), "{model}: {v}");
+        let named = text.replace("\"clamp\"", "\"integrator\": \"prefactored\", \"clamp\"");
+        let p = write(dir.path(), "n.json", &named);
+        refused(&["simulate", "--script", s(&p), "--out", s(&dir.path().join("x.json"))], "dragging spring", 2.0);
+    }
+    let free = script(
+        r#"{"drag":{"node":511,"to":[0.19,0.19,0.19],"duration_s":0.5}},{"wait":{"duration_s":0.5}}"#,
+        r#","clamp":"none""#,
+    );
+    let p = write(dir.path(), "free.json", &free);
+    let o = run(&["simulate", "--script", s(&p), "--out", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).expect("out")).expect("json");
+    assert_eq!(v["blow_ups"].as_array().map(Vec::len), Some(0), "{v}");
+}
+
+/// Class: every check that can be made before the work is: a bad action at the end of a long
+/// script, and an output path that cannot be written, fail at once.
+#[test]
+fn checks_come_before_the_work() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = dir.path().join("o.json");
+    let wait = r#"{"wait":{"duration_s":100}}"#;
+    let bad = [
+        (r#"{"drag":{"node":512,"to":[0,0,0],"duration_s":0}}"#, "node 512"),
+        (r#"{"drag":{"node":0,"to":[5,0,0],"duration_s":0}}"#, "metres"),
+        (
+            r#"{"probe":{"at":[0.05,0.05,0.1],"direction":[0,0,0],"radius":0.01,"depth":0.001,"duration_s":0}}"#,
+            "direction",
+        ),
+        (r#"{"probe":{"at":[0.05,0.05,0.1],"direction":[0,0,-1],"radius":-1,"depth":0.001,"duration_s":0}}"#, "radius"),
+    ];
+    for (action, needle) in bad {
+        let p = write(dir.path(), "s.json", &script(&format!("{wait},{wait},{action}"), ""));
+        refused(&["simulate", "--script", s(&p), "--out", s(&o)], needle, 1.0);
+    }
+    let missing = dir.path().join("missing-dir").join("x.json");
+    refused(&["calibrate", "--object", "A", "--out", s(&missing)], "missing-dir", 1.0);
+    refused(&["simulate", "--script", "assets/examples/interaction.json", "--out", s(&missing)], "missing-dir", 1.0);
+    refused(&["fem", "--object", "A", "--out", s(&missing)], "missing-dir", 1.0);
+    assert!(!o.exists());
+}
+
+/// Class: no non-finite result is written, as an image or as a table.
+#[test]
+fn non_finite_results_are_never_written() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let png = dir.path().join("x.png");
+    refused(&["render", "--case", "A_clamped_ax1_F1e308", "--out", s(&png)], "not finite", 30.0);
+    assert!(!png.exists());
+    let json = dir.path().join("x.json");
+    refused(
+        &["msm", "--object", "A", "--k1", "1e-300", "--k2", "1e-300", "--k3", "1e-300", "--out", s(&json)],
+        "k1",
+        5.0,
+    );
+    assert!(!json.exists());
+}
+
+/// Class: a signal leaves nothing behind: an interrupted run exits without a temporary file.
+#[cfg(unix)]
+#[test]
+fn a_signal_leaves_nothing_behind() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("cal.json");
+    for signal in ["INT", "TERM"] {
+        let child = bin()
+            .args(["calibrate", "--object", "A", "--generations", "1000", "--out", s(&out)])
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn");
+        std::thread::sleep(Duration::from_millis(700));
+        let ok = Command::new("kill").args([&format!("-{signal}"), &child.id().to_string()]).status().expect("kill");
+        assert!(ok.success());
+        let o = child.wait_with_output().expect("wait");
+        assert!(!o.status.success(), "SIG{signal}: {:?}", o.status);
+        let left: Vec<_> = std::fs::read_dir(dir.path()).expect("dir").flatten().map(|e| e.file_name()).collect();
+        assert!(left.is_empty(), "SIG{signal} left {left:?}");
+    }
+}
+
+/// Class: bounds are exact and stated, duplicates and unknown keys are refused, and a missing
+/// constant is named on every path.
+#[test]
+fn bounds_are_exact_and_nothing_is_silently_changed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = dir.path().join("o.json");
+    let rec = r#"{"wait":{"duration_s":0,"record":true}}"#;
+    let at200 = script(&vec![rec; 200].join(","), "");
+    let p = write(dir.path(), "200.json", &at200);
+    let r = run(&["simulate", "--script", s(&p), "--out", s(&o)]);
+    assert!(r.status.success(), "200 recorded actions are within the bound: {}", stderr(&r));
+    let p = write(dir.path(), "201.json", &script(&vec![rec; 201].join(","), ""));
+    refused(&["simulate", "--script", s(&p), "--out", s(&o)], "201", 1.0);
+    for samples in ["0", "10001"] {
+        let a = format!(
+            r#"{{"probe":{{"at":[0.05,0.05,0.1],"direction":[0,0,-1],"radius":0.01,"depth":0.001,"duration_s":0.01,"samples":{samples}}}}}"#
+        );
+        let p = write(dir.path(), "p.json", &script(&a, ""));
+        refused(&["simulate", "--script", s(&p), "--out", s(&o)], "samples", 1.0);
+    }
+    refused(&["calibrate", "--object", "A", "--bound", "k1=1:2", "--bound", "k1=3:4", "--out", s(&o)], "k1", 1.0);
+    let model_key =
+        write(dir.path(), "m.json", r#"{"object":"A","model":"hex","params":{"k1":700,"k2":600,"k3":650,"d":0}}"#);
+    refused(&["errors", "--params", s(&model_key)], "model", 1.0);
+    let no_c23 =
+        write(dir.path(), "c.json", r#"{"object":"A","params":{"k1":700,"k2":600,"k3":650,"d":0,"c12":10,"c13":10}}"#);
+    refused(&["errors", "--params", s(&no_c23)], "c23", 2.0);
+    refused(&["validate", "--params", s(&no_c23)], "c23", 2.0);
+    refused(&["dynamics", "--object", "A", "--params", s(&no_c23)], "c23", 2.0);
+}
+
+/// Class: messages are brief and on one line: long strings are quoted briefly, numbers in short
+/// form, argument errors on one line, nothing printed twice, no "NaN %".
+#[test]
+fn messages_are_brief_and_plain() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = dir.path().join("o.json");
+    let long = write(dir.path(), "long.json", &format!(r#"{{"object":"{}","actions":[]}}"#, "A".repeat(100_000)));
+    refused(&["simulate", "--script", s(&long), "--out", s(&o)], "object", 1.0);
+    let msg = refused(&["errors", "--object", "A", "--k1", "1e308", "--k2", "1e308", "--k3", "1e308"], "k1", 5.0);
+    assert!(!msg.contains("000000000"), "{msg}");
+    refused(&["fem", "--object", "A", "--nodes", "x"], "--nodes", 1.0);
+    refused(&["fem", "--object"], "--object", 1.0);
+    refused(&["nonsense"], "nonsense", 1.0);
+    let r = run(&["dynamics", "--object", "A", "--dt", "0.05"]);
+    let text = format!("{}{}", String::from_utf8_lossy(&r.stdout), stderr(&r));
+    assert!(!text.contains("NaN %") && !text.contains("  "), "{text}");
+}
+
+/// Class: writing to a closed standard output is an error, not a silent success.
+#[cfg(unix)]
+#[test]
+fn a_closed_standard_output_is_an_error() {
+    for args in ["fem --object A --out -", "simulate --script assets/examples/interaction.json --out -"] {
+        let o = Command::new("sh")
+            .args(["-c", &format!("exec \"$0\" {args} >&-"), env!("CARGO_BIN_EXE_tissue-sim")])
+            .output()
+            .expect("sh runs");
+        assert_eq!(o.status.code(), Some(1), "{args}: wrote nothing: {}", stderr(&o));
+        assert!(stderr(&o).contains("standard output"), "{args}: {}", stderr(&o));
+    }
+}
