@@ -73,6 +73,12 @@ impl StaticScene {
         let params = tissue_params(&material, topology)?;
         let model = MsmModel::new(grid, params, material.density)?;
         let u = crate::mechanics::msm::statics::equilibrium(&model, &case)?;
+        if !u.iter().flatten().all(|v| v.is_finite()) {
+            anyhow::bail!(
+                "the static answer of case {id} is not finite (its load is beyond what floating point represents); \
+                 nothing was drawn"
+            );
+        }
         let largest = u.iter().map(|d| DVec3::from(*d).length()).fold(0.0, f64::max);
         let side = crate::mechanics::grid::CUBE_SIDE_M;
         if magnify * largest > side {
@@ -109,8 +115,13 @@ impl StaticScene {
         Ok(Self { grid, positions, scalar, scalar_max, fixed: case.fixed_nodes() })
     }
 
-    /// Renders the scene offscreen with the default camera.
+    /// Renders the scene offscreen with the default camera; refuses a scene with a non-finite
+    /// position or colour value (no image of nothing is written).
     pub fn render_png(&self, width: u32, height: u32) -> anyhow::Result<RenderedPng> {
+        let values = self.positions.iter().flatten().chain(self.scalar.iter().flatten());
+        if !values.copied().all(f32::is_finite) {
+            anyhow::bail!("the scene has a non-finite position or colour value; nothing was drawn");
+        }
         let headless = Headless::new()?;
         let mut mesh = SurfaceMesh::new(&self.grid);
         mesh.update(&self.positions, self.scalar.as_deref());
