@@ -27,7 +27,7 @@ pub fn num(v: f64) -> String {
 const MAX_QUOTED_CHARS: usize = 60;
 
 /// A message as one brief line: line breaks and runs of blanks become single spaces, and any
-/// quoted text (between `"`, `'` or backquotes) longer than [`MAX_QUOTED_CHARS`] is cut, saying
+/// quoted text (between `"`, `'` or backquotes) longer than 60 characters is cut, saying
 /// how long it was, so that a 100,000-character input comes back as a short error.
 pub fn brief_line(message: &str) -> String {
     let mut words = String::with_capacity(message.len().min(4096));

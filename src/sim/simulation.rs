@@ -316,7 +316,7 @@ impl Simulation {
         }
         // A cube held nowhere may move as a whole (a drag carries it along): its mean
         // displacement is motion, not deformation.
-        let held = self.tissue.free().iter().any(|&f| f == 0.0);
+        let held = self.tissue.free().contains(&0.0);
         for c in 0..3 {
             let shift = if held {
                 0.0

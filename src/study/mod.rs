@@ -2,7 +2,7 @@
 //! measurement of one model [`chart_measure`], [`pareto`] fronts, [`plot`]), the stability study
 //! of explicit integration ([`stability`]), the choice of the smallest model that meets a scene's
 //! error and rate budget ([`choose`]), the paper's tables and figures ([`reproduce`]), timings
-//! ([`timing`], [`bench`]) and scripted interaction ([`script`], `simulate`).
+//! ([`timing`], [`bench`](mod@bench)) and scripted interaction ([`script`], `simulate`).
 //!
 //! May use: calibrate, validate, sim, response, mechanics, io.
 

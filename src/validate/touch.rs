@@ -8,7 +8,7 @@
 //! lumped masses. Point and probe cases come in a training set and a validation set that share
 //! no node. Every model is scored in its small-displacement (rest-tangent) response against the
 //! project's hex8 FEM on the same mesh, computed once per material and resolution
-//! ([`Reference`]).
+//! (`touch_score::Reference`).
 //!
 //! The response layer's `linear` holds the stiffness, the solves and the contact, and its
 //! `modes` the frequencies; the sibling `touch_score` holds the reference answers and the scores;
