@@ -265,6 +265,55 @@ impl SpdSystem {
     }
 }
 
+/// The largest grid each direct solve accepts, nodes per axis, at the memory its factor needs
+/// (the sparse factor bound, [`MAX_FACTOR_BYTES`]); checked before any work
+/// ([`DirectSolve::check_grid`]): the FEM patch cases and the touch benchmark (full, unreduced
+/// systems).
+pub const MAX_NODES_FEM_PATCH: usize = 32;
+/// See [`MAX_NODES_FEM_PATCH`]: the static Newton solve of the shear and hex lattices.
+pub const MAX_NODES_MSM_NEWTON: usize = 40;
+
+/// A direct solve whose factor bounds the grid ([`MAX_NODES_FEM_PATCH`],
+/// [`MAX_NODES_MSM_NEWTON`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DirectSolve {
+    /// The FEM patch cases: a full, unreduced system.
+    FemPatch,
+    /// The touch benchmark: full, unreduced FEM systems.
+    TouchBenchmark,
+    /// The static Newton solve of the shear and hex lattices.
+    MsmNewton,
+}
+
+impl DirectSolve {
+    /// The largest grid this solve accepts, nodes per axis.
+    pub const fn max_nodes(self) -> usize {
+        match self {
+            DirectSolve::FemPatch | DirectSolve::TouchBenchmark => MAX_NODES_FEM_PATCH,
+            DirectSolve::MsmNewton => MAX_NODES_MSM_NEWTON,
+        }
+    }
+
+    /// Refuses a grid of `n` nodes per axis above [`DirectSolve::max_nodes`], with a message
+    /// naming `--nodes`.
+    pub fn check_grid(self, n: usize) -> Result<(), String> {
+        let what = match self {
+            DirectSolve::FemPatch => "the FEM patch cases (a full, unreduced system)",
+            DirectSolve::TouchBenchmark => "the touch benchmark (full, unreduced systems)",
+            DirectSolve::MsmNewton => "the static Newton solve of the shear and hex lattices",
+        };
+        let max = self.max_nodes();
+        if n > max {
+            return Err(format!(
+                "--nodes {n} is too large for {what}: at most {max} nodes per axis, whose factor fits the bound of \
+                 {} MB",
+                MAX_FACTOR_BYTES >> 20
+            ));
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -136,3 +136,20 @@ impl StaticScene {
         Ok(RenderedPng { bytes, adapter: headless.adapter_info.name.clone(), backend: headless.adapter_info.backend })
     }
 }
+
+/// Checks a drawing magnification: a non-negative number (the message names `render`'s flag).
+pub fn check_magnify(magnify: f64) -> anyhow::Result<()> {
+    if !(magnify.is_finite() && magnify >= 0.0) {
+        anyhow::bail!("--magnify must be a non-negative number, got {magnify}");
+    }
+    Ok(())
+}
+
+/// Checks an offscreen image's size: 16 to 8192 pixels a side (the message names `render`'s
+/// flags).
+pub fn check_image_size(width: u32, height: u32) -> anyhow::Result<()> {
+    if !(16..=8192).contains(&width) || !(16..=8192).contains(&height) {
+        anyhow::bail!("--width and --height must be from 16 to 8192 pixels, got {width}x{height}");
+    }
+    Ok(())
+}

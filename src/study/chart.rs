@@ -51,6 +51,30 @@ impl Default for ChartOptions {
     }
 }
 
+impl ChartOptions {
+    /// The default options for `objects` (trimmed, upper case; the presets A and B) at
+    /// `resolutions` (at least one, each in 2..=32 nodes per axis).
+    pub fn new(objects: Vec<String>, resolutions: Vec<usize>) -> anyhow::Result<Self> {
+        let objects: Vec<String> = objects.iter().map(|o| o.trim().to_ascii_uppercase()).collect();
+        for o in &objects {
+            if Material::preset(o).is_none() {
+                anyhow::bail!("unknown object {o:?}: the chart covers the presets A and B");
+            }
+        }
+        if resolutions.is_empty() {
+            anyhow::bail!("give at least one resolution");
+        }
+        for &n in &resolutions {
+            if !(2..=32).contains(&n) {
+                anyhow::bail!(
+                    "resolution {n} is out of range: nodes per axis must be in 2..=32 (the reference FEM is 40^3)"
+                );
+            }
+        }
+        Ok(Self { objects, resolutions, ..Default::default() })
+    }
+}
+
 /// The mass-proportional rate of `kind` for `material`: the chart's damping ratio at the
 /// model's own 8^3 fundamental.
 fn damping_rate(material: &Material, kind: Model) -> anyhow::Result<f64> {

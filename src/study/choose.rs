@@ -237,6 +237,36 @@ fn conclusion(s: &mut String, chosen: Option<&ChartPoint>, mine: &[&ChartPoint],
     }
 }
 
+/// The default touch force budget, percent: people tell forces apart at about 7 %.
+pub const DEFAULT_MAX_FORCE_ERROR_PCT: f64 = 7.0;
+
+impl Budget {
+    /// Checks the budget: positive percentages and a positive rate of at most 1e7 Hz (the
+    /// messages name `choose`'s flags).
+    pub fn check(&self) -> anyhow::Result<()> {
+        let f = self.max_force_error_pct;
+        if !(f.is_finite() && f > 0.0) {
+            anyhow::bail!("--max-force-error must be a positive percentage, got {f}");
+        }
+        for (flag, value) in [
+            ("--max-error", self.max_error_pct),
+            ("--max-period-error", self.max_period_error_pct),
+            ("--max-damping-error", self.max_damping_error_pct),
+        ] {
+            if let Some(v) = value
+                && !(v.is_finite() && v > 0.0)
+            {
+                anyhow::bail!("{flag} must be a positive percentage, got {v}");
+            }
+        }
+        let rate = self.rate_hz;
+        if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
+            anyhow::bail!("--rate must be a positive rate in Hz (at most 1e7), got {rate}");
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -80,3 +80,80 @@ pub fn format_table(title: &str, errors: &[CaseError]) -> String {
     }
     s
 }
+
+/// The paper's error tables of one MSM parameter set against the FEM on the clamped cases
+/// (`tissue-sim errors`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ErrorsReport {
+    /// The material's name.
+    pub object: String,
+    /// Nodes per axis.
+    pub nodes_per_axis: usize,
+    /// The MSM's parameters.
+    pub params: crate::mechanics::msm::MsmParams,
+    /// The paper's cost ([`cost`]), metres.
+    pub cost: f64,
+    /// Each case's errors ([`case_errors`]).
+    pub cases: Vec<CaseError>,
+}
+
+impl ErrorsReport {
+    /// The paper's Table IV/V layout ([`format_table`]) under a title with the object, the
+    /// lattice and the cost.
+    pub fn to_text(&self) -> String {
+        let title = format!("Object {} ({:?} MSM, cost {:.6e} m)", self.object, self.params.topology(), self.cost);
+        format_table(&title, &self.cases)
+    }
+}
+
+/// Solves the paper's clamped cases with the FEM and with the MSM of `params` on `grid`, and
+/// compares them. Refuses a grid above the MSM's Newton bound
+/// ([`crate::mechanics::sparse::DirectSolve::MsmNewton`]) and a cost that is not finite.
+pub fn errors_report(
+    material: &crate::mechanics::material::Material,
+    params: crate::mechanics::msm::MsmParams,
+    grid: crate::mechanics::grid::Grid,
+) -> anyhow::Result<ErrorsReport> {
+    use anyhow::Context as _;
+
+    use crate::mechanics::cases::{Bc, benchmark_cases};
+    use crate::mechanics::fem::FemModel;
+    use crate::mechanics::msm::{MsmModel, Topology, statics};
+    use crate::mechanics::sparse::DirectSolve;
+    if params.topology() != Topology::Axis {
+        DirectSolve::MsmNewton.check_grid(grid.n()).map_err(anyhow::Error::msg)?;
+    }
+    let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
+    let fem = FemModel::new(grid, material)
+        .solve_cases(&cases)
+        .with_context(|| format!("solving the FEM stiffness system of material {} at {}^3", material.name, grid.n()))?;
+    let model = MsmModel::new(grid, params, material.density)?;
+    let msm = statics::solve_cases(&model, &cases).with_context(|| msm_context(material, &params, grid.n()))?;
+    let errs = case_errors(grid.h(), &msm, &fem);
+    let total = cost(&msm, &fem);
+    if !total.is_finite() {
+        anyhow::bail!(
+            "the MSM-vs-FEM cost of material {} is not finite (cost {total}): the parameters are outside what \
+             floating point represents",
+            material.name
+        );
+    }
+    Ok(ErrorsReport { object: material.name.clone(), nodes_per_axis: grid.n(), params, cost: total, cases: errs })
+}
+
+/// What a failed static MSM solve was solving: the lattice, the material, the grid and the axis
+/// stiffnesses.
+pub fn msm_context(
+    material: &crate::mechanics::material::Material,
+    params: &crate::mechanics::msm::MsmParams,
+    n: usize,
+) -> String {
+    format!(
+        "solving the static equilibrium of the {:?} MSM of material {} at {n}^3 with k1 = {}, k2 = {}, k3 = {} N/m",
+        params.topology(),
+        material.name,
+        params.k1,
+        params.k2,
+        params.k3
+    )
+}

@@ -399,3 +399,57 @@ fn trajectory(
     }
     Ok(Trajectory { dt: config.dt, samples })
 }
+
+impl DynamicReport {
+    /// The report as text (`tissue-sim dynamics`), with the step policy's `note`, if any.
+    pub fn to_text(&self, note: Option<&str>) -> String {
+        let r = self;
+        let mut t = format!(
+            "Dynamics: object {}, model {}, {} at dt = {} s, damping ratio {} at the fundamental (mass-proportional, \
+             the viewer's scene: face z = 0 clamped); trajectories and modes: {}\n",
+            r.object,
+            r.model,
+            r.integrator,
+            crate::io::num(r.dt_s),
+            r.damping_ratio_set,
+            r.scene
+        );
+        if let Some(n) = note {
+            t += &format!("note: {n}\n");
+        }
+        let list = crate::validate::touch_score::frequency_list;
+        t += &format!("lowest modes, Hz: model {}; FEM {}\n", list(&r.modes_hz), list(&r.fem_modes_hz));
+        t += &format!(
+            "fundamental period: measured {:.4} ms, own modal {:.4} ms (error {:.3} %), FEM {:.4} ms (error {:.3} %)\n",
+            1e3 * r.measured_period_s,
+            1e3 * r.modal_period_s,
+            100.0 * r.period_error,
+            1e3 * r.fem_period_s,
+            100.0 * r.fem_period_error
+        );
+        t += &format!(
+            "damping ratio: measured {:.4}, set {:.4} (error {:.3} % of critical)\n",
+            r.measured_damping_ratio,
+            r.damping_ratio_set,
+            100.0 * r.damping_error
+        );
+        if let Some(p) = r.predicted {
+            t += &format!(
+                "closed form of {} on the fundamental: period {:.4} ms, damping ratio {:.4}\n",
+                r.integrator,
+                1e3 * p.period_s,
+                p.damping_ratio
+            );
+        }
+        for e in &r.transients {
+            let what = if e.transient == Transient::ProbeTap { "probe force" } else { "loaded face" };
+            t += &format!(
+                "trajectory error ({what}), {}: {:.3} % (FEM reference: Newmark, converged at {} s)\n",
+                e.transient.name(),
+                100.0 * e.error,
+                crate::io::num(e.reference_step_s)
+            );
+        }
+        t
+    }
+}

@@ -1,0 +1,109 @@
+//! `tissue-sim calibrate`: the MSM calibrated against the FEM reference.
+
+use std::path::PathBuf;
+
+use anyhow::{Context as _, bail};
+use clap::Args;
+
+use super::args::{GridArgs, ObjectArgs};
+use super::output::progress_bar;
+use crate::calibrate::{CaseSet, CostMode, GeneSpace, Method, Problem, Settings, calibrate};
+use crate::io::write_json_atomic;
+use crate::mechanics::msm::Topology;
+use crate::mechanics::sparse::DirectSolve;
+
+/// The flags of `calibrate`.
+#[derive(Debug, Args)]
+#[allow(missing_docs)] // flattened argument groups document their own fields
+pub struct CalibrateArgs {
+    #[command(flatten)]
+    pub object: ObjectArgs,
+    /// Search method.
+    #[arg(long, value_enum, default_value = "hybrid")]
+    pub method: Method,
+    /// Random seed (same seed and settings: same result).
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
+    pub seed: u64,
+    /// Population size.
+    #[arg(long, default_value_t = 50, allow_hyphen_values = true)]
+    pub population: usize,
+    /// Generations (temperature steps for SA).
+    #[arg(long, default_value_t = 100, allow_hyphen_values = true)]
+    pub generations: usize,
+    /// Mutation probability per chromosome.
+    #[arg(long, default_value_t = 0.2, allow_hyphen_values = true)]
+    pub mutation: f64,
+    /// Crossover probability per selected pair.
+    #[arg(long, default_value_t = 0.8, allow_hyphen_values = true)]
+    pub crossover: f64,
+    /// Cost: static equilibria (the paper's).
+    #[arg(long, value_enum, default_value = "static")]
+    pub cost: CostMode,
+    /// MSM topology: the paper's axis springs, axis + face-diagonal (shear) springs, or the hex-element lattice.
+    #[arg(long, value_enum, default_value = "axis")]
+    pub model: Topology,
+    /// Training cases: the paper's nine face loads, the touch benchmark's training set, or both.
+    #[arg(long, value_enum, default_value = "paper")]
+    pub cases: CaseSet,
+    /// Override a gene's search bounds, e.g. `--bound k1=100:5000` (repeatable).
+    #[arg(long = "bound", value_name = "GENE=LO:HI")]
+    pub bounds: Vec<String>,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Output JSON file (the spec's calibration result).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Calibrates and writes the result.
+pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
+    let CalibrateArgs {
+        object,
+        method,
+        seed,
+        population,
+        generations,
+        mutation,
+        crossover,
+        cost,
+        model,
+        cases,
+        bounds,
+        grid,
+        out,
+    } = args;
+    let material = object.material(None)?;
+    let grid = grid.grid()?;
+    let settings = Settings { method, seed, population, generations, mutation, crossover, cost, ..Settings::default() };
+    settings.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut space = GeneSpace::new(&material, &grid, model);
+    for b in &bounds {
+        let (name, range) = b.split_once('=').with_context(|| format!("--bound {b:?}: expected GENE=LO:HI"))?;
+        let (lo, hi) = range.split_once(':').with_context(|| format!("--bound {b:?}: expected GENE=LO:HI"))?;
+        let lo: f64 = lo.trim().parse().with_context(|| format!("--bound {b:?}: bad lower bound"))?;
+        let hi: f64 = hi.trim().parse().with_context(|| format!("--bound {b:?}: bad upper bound"))?;
+        space.set_bound(name.trim(), lo, hi).map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
+    }
+    if model != Topology::Axis {
+        DirectSolve::MsmNewton.check_grid(grid.n()).map_err(anyhow::Error::msg)?;
+    }
+    let name = material.name.clone();
+    let problem = Problem::new(material, grid, model)
+        .and_then(|p| p.with_cases(cases))
+        .with_context(|| format!("the FEM reference of material {name} at {}^3", grid.n()))?;
+    let bar = progress_bar(generations as u64, "generations");
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let result = calibrate(&problem, &space, &settings, &cancel, &mut |s| {
+        bar.set_position(s.generation as u64);
+        bar.set_message(format!("best cost {:.6e} m", s.best_cost));
+    })
+    .with_context(|| format!("calibrating the {model:?} MSM of material {name}"))?;
+    bar.finish_and_clear();
+    if !result.cost.is_finite() {
+        bail!(
+            "calibration of material {name} found no parameter set with a finite cost inside the bounds \
+             (every evaluation failed); widen or move the --bound ranges"
+        );
+    }
+    write_json_atomic(&out, &result)
+}

@@ -1,0 +1,78 @@
+//! `tissue-sim choose`: the smallest sufficient model for an error budget and a step rate.
+
+use std::path::PathBuf;
+
+use anyhow::bail;
+use clap::Args;
+
+use super::output::say;
+use crate::study::chart::ChartOptions;
+use crate::study::choose::{Budget, Metric};
+
+/// The flags of `choose`.
+#[derive(Debug, Args)]
+pub struct ChooseArgs {
+    /// Touch force budget: the largest force error on the touch benchmark's validation set,
+    /// percent (7: people tell forces apart at about 7 %).
+    #[arg(
+        long = "max-force-error",
+        value_name = "PCT",
+        default_value_t = crate::study::choose::DEFAULT_MAX_FORCE_ERROR_PCT,
+        allow_hyphen_values = true
+    )]
+    pub max_force_error: f64,
+    /// Also bound the static error on the paper's cases, percent of the paper's h (L/7),
+    /// against the fine FEM.
+    #[arg(long = "max-error", value_name = "PCT", allow_hyphen_values = true)]
+    pub max_error: Option<f64>,
+    /// Dynamic budget: the largest error of the fundamental's period (the integrator's,
+    /// measured by time stepping against the model's own mode), percent.
+    #[arg(long = "max-period-error", value_name = "PCT", allow_hyphen_values = true)]
+    pub max_period_error: Option<f64>,
+    /// Dynamic budget: the largest error of the fundamental's damping ratio, percent of
+    /// critical.
+    #[arg(long = "max-damping-error", value_name = "PCT", allow_hyphen_values = true)]
+    pub max_damping_error: Option<f64>,
+    /// Real-time step rate the model must keep up with, Hz (1 kHz: haptics).
+    #[arg(long, default_value_t = 1000.0, allow_hyphen_values = true)]
+    pub rate: f64,
+    /// Object.
+    #[arg(long, default_value = "A")]
+    pub object: String,
+    /// Which error the budget bounds.
+    #[arg(long, value_enum, default_value = "max")]
+    pub metric: Metric,
+    /// A chart.csv written by `tissue-sim chart` (otherwise the chart of this object is computed, about a minute).
+    #[arg(long, value_name = "FILE.csv")]
+    pub chart: Option<PathBuf>,
+}
+
+/// Prints the choice and its explanation; fails when no model meets the budget.
+pub fn run(args: ChooseArgs) -> anyhow::Result<()> {
+    let budget = Budget {
+        max_force_error_pct: args.max_force_error,
+        max_error_pct: args.max_error,
+        metric: args.metric,
+        rate_hz: args.rate,
+        max_period_error_pct: args.max_period_error,
+        max_damping_error_pct: args.max_damping_error,
+    };
+    budget.check()?;
+    let object = args.object.to_ascii_uppercase();
+    let points = match args.chart {
+        Some(path) => crate::study::read_chart_csv(&path)?,
+        None => {
+            let opts = ChartOptions::new(vec![object.clone()], ChartOptions::default().resolutions)?;
+            crate::study::chart::compute(&opts, &mut |m| eprintln!("{m}"))?.0
+        }
+    };
+    if !points.iter().any(|p| p.object == object) {
+        bail!("the chart has no points for object {object}");
+    }
+    let choice = crate::study::choose::choose(&points, &object, &budget);
+    say(&choice.explanation)?;
+    if choice.chosen.is_none() {
+        bail!("no model meets the budget");
+    }
+    Ok(())
+}

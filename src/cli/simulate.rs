@@ -1,0 +1,27 @@
+//! `tissue-sim simulate`: a scripted sequence of tool actions, without rendering.
+
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+use clap::Args;
+
+use crate::io::read_json;
+
+/// The flags of `simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// The script (JSON), see README.
+    #[arg(long)]
+    pub script: PathBuf,
+    /// Output JSON file.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Runs the script and writes node positions and tool forces.
+pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
+    let s: crate::study::script::Script = read_json(&args.script)?;
+    let outcome = crate::study::script::run(&s).with_context(|| format!("in {}", args.script.display()))?;
+    outcome.check_finite()?;
+    crate::io::write_json_compact(&args.out, &outcome)
+}
