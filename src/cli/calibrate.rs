@@ -10,7 +10,6 @@ use super::output::progress_bar;
 use crate::calibrate::{CaseSet, CostMode, GeneSpace, Method, Problem, Settings, calibrate};
 use crate::io::write_json_atomic;
 use crate::mechanics::msm::Topology;
-use crate::mechanics::sparse::DirectSolve;
 
 /// The flags of `calibrate`.
 #[derive(Debug, Args)]
@@ -84,9 +83,7 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
         let hi: f64 = hi.trim().parse().with_context(|| format!("--bound {b:?}: bad upper bound"))?;
         space.set_bound(name.trim(), lo, hi).map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
     }
-    if model != Topology::Axis {
-        DirectSolve::MsmNewton.check_grid(grid.n()).map_err(anyhow::Error::msg)?;
-    }
+    crate::mechanics::msm::statics::check_grid(model, grid.n()).map_err(anyhow::Error::msg)?;
     let name = material.name.clone();
     let problem = Problem::new(material, grid, model)
         .and_then(|p| p.with_cases(cases))

@@ -10,8 +10,7 @@ use super::output::progress_bar;
 use crate::io::write_json_atomic;
 use crate::mechanics::cases::{Bc, benchmark_cases};
 use crate::mechanics::displacement_file::{CaseRecord, DisplacementFile};
-use crate::mechanics::msm::{MsmModel, Topology, statics};
-use crate::mechanics::sparse::DirectSolve;
+use crate::mechanics::msm::{MsmModel, statics};
 use crate::validate::accuracy::msm_context;
 
 /// The flags of `msm`.
@@ -35,9 +34,7 @@ pub fn run(args: MsmArgs) -> anyhow::Result<()> {
     let material = object.material(None)?;
     let params = params.resolve(&material)?;
     let grid = grid.grid()?;
-    if params.topology() != Topology::Axis {
-        DirectSolve::MsmNewton.check_grid(grid.n()).map_err(anyhow::Error::msg)?;
-    }
+    statics::check_grid(params.topology(), grid.n()).map_err(anyhow::Error::msg)?;
     let model = MsmModel::new(grid, params, material.density)?;
     let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
     let bar = progress_bar(cases.len() as u64, "cases");

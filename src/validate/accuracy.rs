@@ -108,7 +108,7 @@ impl ErrorsReport {
 
 /// Solves the paper's clamped cases with the FEM and with the MSM of `params` on `grid`, and
 /// compares them. Refuses a grid above the MSM's Newton bound
-/// ([`crate::mechanics::sparse::DirectSolve::MsmNewton`]) and a cost that is not finite.
+/// ([`crate::mechanics::msm::statics::check_grid`]) and a cost that is not finite.
 pub fn errors_report(
     material: &crate::mechanics::material::Material,
     params: crate::mechanics::msm::MsmParams,
@@ -118,11 +118,8 @@ pub fn errors_report(
 
     use crate::mechanics::cases::{Bc, benchmark_cases};
     use crate::mechanics::fem::FemModel;
-    use crate::mechanics::msm::{MsmModel, Topology, statics};
-    use crate::mechanics::sparse::DirectSolve;
-    if params.topology() != Topology::Axis {
-        DirectSolve::MsmNewton.check_grid(grid.n()).map_err(anyhow::Error::msg)?;
-    }
+    use crate::mechanics::msm::{MsmModel, statics};
+    statics::check_grid(params.topology(), grid.n()).map_err(anyhow::Error::msg)?;
     let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
     let fem = FemModel::new(grid, material)
         .solve_cases(&cases)

@@ -46,7 +46,7 @@ impl Default for StudyPanel {
             status: String::new(),
             csv_path: "chart/chart.csv".into(),
             max_error: 1.5,
-            max_force_error: 7.0,
+            max_force_error: crate::study::choose::DEFAULT_MAX_FORCE_ERROR_PCT,
             bound_static: false,
             dynamic: (
                 100.0 * crate::sim::DEFAULT_DYNAMIC_BUDGET.period,

@@ -320,3 +320,13 @@ fn reaction(model: &MsmModel, case: &LoadCase, u: &[[f64; 3]]) -> [f64; 3] {
     }
     r
 }
+
+/// Whether the static answer of a `topology` lattice at `n` nodes per axis is within reach: the
+/// axis lattice's closed form always is; the shear and hex lattices' Newton solve is bounded by
+/// its sparse factor ([`crate::mechanics::sparse::DirectSolve::MsmNewton`]).
+pub fn check_grid(topology: Topology, n: usize) -> Result<(), String> {
+    match topology {
+        Topology::Axis => Ok(()),
+        Topology::Shear | Topology::Hex => crate::mechanics::sparse::DirectSolve::MsmNewton.check_grid(n),
+    }
+}

@@ -1,63 +1,11 @@
-//! Layer 0, files and numbers: bounded reading, atomic writing (JSON and bytes), output folders,
-//! and numbers as messages show them. May use nothing else of the crate.
+//! Output files, written atomically and never a hazard: standard output, special files, links,
+//! protected files, output directories that appear whole.
 
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-/// A number as a message shows it, short: exactly as typed when it has at most six significant
-/// digits (plain when moderate, `1e-300` in exponent form rather than three hundred zeros),
-/// otherwise rounded to four significant digits in exponent form (`4.156e-4`).
-pub fn num(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let shortest = format!("{v:e}");
-    let digits = shortest.split('e').next().unwrap_or("").chars().filter(char::is_ascii_digit).count();
-    if digits > 6 {
-        format!("{v:.3e}")
-    } else if (1e-4..1e7).contains(&v.abs()) {
-        format!("{v}")
-    } else {
-        shortest
-    }
-}
-
-/// Longest quoted text a message repeats, characters.
-const MAX_QUOTED_CHARS: usize = 60;
-
-/// A message as one brief line: line breaks and runs of blanks become single spaces, and any
-/// quoted text (between `"`, `'` or backquotes) longer than 60 characters is cut, saying
-/// how long it was, so that a 100,000-character input comes back as a short error.
-pub fn brief_line(message: &str) -> String {
-    let mut words = String::with_capacity(message.len().min(4096));
-    for w in message.split_whitespace() {
-        if !words.is_empty() {
-            words.push(' ');
-        }
-        words.push_str(w);
-    }
-    let mut out = String::with_capacity(words.len().min(4096));
-    let mut rest = words.as_str();
-    while let Some(start) = rest.find(['"', '\'', '`']) {
-        let quote = rest[start..].chars().next().unwrap_or('"');
-        let body = &rest[start + 1..];
-        let Some(len) = body.find(quote) else { break };
-        out.push_str(&rest[..=start]);
-        let quoted = &body[..len];
-        let chars = quoted.chars().count();
-        if chars > MAX_QUOTED_CHARS {
-            out.extend(quoted.chars().take(MAX_QUOTED_CHARS / 2));
-            out.push_str(&format!("... ({chars} characters)"));
-        } else {
-            out.push_str(quoted);
-        }
-        out.push(quote);
-        rest = &body[len + 1..];
-    }
-    out.push_str(rest);
-    out
-}
+use super::pending::Pending;
 
 /// Largest file any command writes, bytes: a bound no input can exceed (a result over it is an
 /// error naming the bound, and nothing is written).
@@ -321,127 +269,10 @@ impl OutputDir {
     }
 }
 
-/// Temporary files and directories being written, removed by [`remove_pending`] when a signal
-/// ends the process before they are renamed into place.
-static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
-
-/// A temporary path listed in [`PENDING`] while it lives.
-struct Pending(PathBuf);
-
-impl Pending {
-    fn track(path: &Path) -> Self {
-        if let Ok(mut p) = PENDING.lock() {
-            p.push(path.to_path_buf());
-        }
-        Self(path.to_path_buf())
-    }
-}
-
-impl Drop for Pending {
-    fn drop(&mut self) {
-        if let Ok(mut p) = PENDING.lock() {
-            p.retain(|q| q != &self.0);
-        }
-    }
-}
-
-/// Removes every temporary file and directory still being written: what a signal handler calls
-/// before the process exits (SIGINT, SIGTERM), so that an interrupted write leaves nothing behind.
-pub fn remove_pending() {
-    let paths = match PENDING.lock() {
-        Ok(mut p) => std::mem::take(&mut *p),
-        Err(_) => return,
-    };
-    for p in paths {
-        if p.is_dir() {
-            let _ = std::fs::remove_dir_all(&p);
-        } else {
-            let _ = std::fs::remove_file(&p);
-        }
-    }
-}
-
-/// Reads a JSON file (at most [`MAX_INPUT_BYTES`]).
-pub fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> anyhow::Result<T> {
-    use anyhow::Context as _;
-    let text = read_text(path)?;
-    serde_json::from_str(&text).with_context(|| format!("invalid JSON in {}", path.display()))
-}
-
-/// Largest input file read, bytes.
-pub const MAX_INPUT_BYTES: u64 = 16 << 20;
-
-/// Reads a text file of at most [`MAX_INPUT_BYTES`].
-pub fn read_text(path: &Path) -> anyhow::Result<String> {
-    use anyhow::{Context as _, bail};
-    use std::io::Read as _;
-    let f = std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
-    if f.metadata().is_ok_and(|m| m.is_dir()) {
-        bail!("cannot read {}: it is a directory", path.display());
-    }
-    let mut text = String::new();
-    f.take(MAX_INPUT_BYTES + 1).read_to_string(&mut text).with_context(|| format!("cannot read {}", path.display()))?;
-    if text.len() as u64 > MAX_INPUT_BYTES {
-        bail!("{} is larger than the input bound of {} MB", path.display(), MAX_INPUT_BYTES >> 20);
-    }
-    Ok(text)
-}
-
 #[cfg(all(test, unix))]
 mod tests {
     use super::*;
     use std::os::unix::fs::PermissionsExt as _;
-
-    /// Numbers in messages are short: as typed when short, four significant digits otherwise,
-    /// never hundreds of digits.
-    #[test]
-    fn numbers_print_short() {
-        assert_eq!(num(0.001), "0.001");
-        assert_eq!(num(1e-4), "0.0001");
-        assert_eq!(num(2.5), "2.5");
-        assert_eq!(num(1e308), "1e308");
-        assert_eq!(num(1e-300), "1e-300");
-        assert_eq!(num(0.0004155926674608283), "4.156e-4");
-        assert_eq!(num(-123456.789), "-1.235e5");
-        assert_eq!(num(f64::NAN), "NaN");
-        for v in [1e308, -1e-300, 1.0 / 3.0, 6.02e23, 5e-324] {
-            assert!(num(v).len() <= 10, "{v}: {}", num(v));
-        }
-    }
-
-    /// Messages come back on one short line, whatever was quoted in them.
-    #[test]
-    fn messages_are_brief_lines() {
-        let long = "x".repeat(100_000);
-        let m = brief_line(&format!("unknown object \"{long}\":\n  the presets   are A and B"));
-        assert!(m.len() < 200, "{m}");
-        assert!(m.starts_with("unknown object \"xxx") && m.ends_with("characters)\": the presets are A and B"), "{m}");
-        assert_eq!(brief_line("a `b` 'c' \"d\" e"), "a `b` 'c' \"d\" e");
-        assert_eq!(brief_line("it's \"open"), "it's \"open");
-    }
-
-    /// What a signal handler removes: the temporary files and directories still in flight.
-    #[test]
-    fn pending_temporaries_are_removed() {
-        let dir = tempfile::tempdir().unwrap();
-        let file = dir.path().join(".tissue-sim-x.tmp");
-        std::fs::write(&file, b"partial").unwrap();
-        let sub = dir.path().join(".tissue-sim-d");
-        std::fs::create_dir(&sub).unwrap();
-        let (_a, _b) = (Pending::track(&file), Pending::track(&sub));
-        remove_pending();
-        assert!(!file.exists() && !sub.exists());
-        drop(_a);
-        assert!(PENDING.lock().unwrap().iter().all(|p| p != &file));
-    }
-
-    /// Every input goes through one bounded reading path: a device that never ends is cut at the
-    /// bound and refused.
-    #[test]
-    fn endless_inputs_are_refused_at_the_bound() {
-        let e = read_text(Path::new("/dev/zero")).unwrap_err();
-        assert!(format!("{e:#}").contains("input bound"), "{e:#}");
-    }
 
     #[test]
     fn a_symlink_is_followed_not_replaced() {

@@ -29,6 +29,10 @@
 //! a symplectic integrator forced above its stability limit is refused before any step.
 
 use glam::DVec3;
+
+mod check;
+
+use check::{check_script, check_steps, drag_nodes};
 use serde::{Deserialize, Serialize};
 
 use crate::mechanics::cases::{LoadCase, parse_case_id};
@@ -201,35 +205,6 @@ pub struct Outcome {
     pub blow_ups: Vec<String>,
 }
 
-fn check(name: &str, v: f64, positive: bool) -> anyhow::Result<()> {
-    if !v.is_finite() || v < 0.0 || (positive && v == 0.0) {
-        anyhow::bail!(
-            "script: {name} must be a {} finite number, got {}",
-            if positive { "positive" } else { "non-negative" },
-            crate::io::num(v)
-        );
-    }
-    Ok(())
-}
-
-/// A point must lie within one cube side of the cube: a coordinate typed in millimetres (or
-/// any runaway value) is refused by name rather than flinging the tissue.
-fn check_point(what: &str, p: &[f64; 3]) -> anyhow::Result<()> {
-    let l = crate::mechanics::grid::CUBE_SIDE_M;
-    for (c, v) in p.iter().enumerate() {
-        if !v.is_finite() {
-            anyhow::bail!("script: {what}[{c}] is not finite");
-        }
-        if !(-l..=2.0 * l).contains(v) {
-            anyhow::bail!(
-                "script: {what} = {p:?} lies outside the cube's neighbourhood: coordinates are metres, the cube spans \
-                 0 to {l} m, and points must lie within {l} m of it"
-            );
-        }
-    }
-    Ok(())
-}
-
 impl Outcome {
     /// Checks that every number of the outcome is finite (before it is written).
     pub fn check_finite(&self) -> anyhow::Result<()> {
@@ -314,108 +289,6 @@ pub const MAX_ACTION_S: f64 = 100.0;
 /// Steps of an action lasting `d` seconds at `dt` (both checked).
 fn steps_for(d: f64, dt: f64) -> u64 {
     (d / dt).round() as u64
-}
-
-/// Probe samples of one probe action.
-pub const MAX_SAMPLES_PER_PROBE: usize = 10_000;
-
-/// Every check of a script that does not depend on the step, made before any work: the step, the
-/// bounds on actions and recorded events, and each action's node, points, sizes and samples.
-fn check_script(script: &Script) -> anyhow::Result<()> {
-    check("dt", script.dt, true)?;
-    if !(1e-6..=0.05).contains(&script.dt) {
-        anyhow::bail!("script: dt = {} s is out of range (1e-6 to 0.05 s)", crate::io::num(script.dt));
-    }
-    if script.actions.len() > MAX_ACTIONS {
-        anyhow::bail!("script: {} actions, above the bound of {MAX_ACTIONS}", script.actions.len());
-    }
-    let last = script.actions.len().saturating_sub(1);
-    let recorded = script.actions.iter().enumerate().filter(|&(i, a)| a.record() || i == last).count();
-    if recorded > MAX_RECORDED {
-        anyhow::bail!("script: {recorded} actions record positions (with the last), above the bound of {MAX_RECORDED}");
-    }
-    let mut total_samples = 0usize;
-    for (i, a) in script.actions.iter().enumerate() {
-        check_action(a).map_err(|e| anyhow::anyhow!("script: action {i}: {e}"))?;
-        if let Action::Probe { samples, .. } = a {
-            total_samples += samples;
-        }
-    }
-    if total_samples > MAX_SAMPLES {
-        anyhow::bail!("script: {total_samples} probe samples in all, above the bound of {MAX_SAMPLES}");
-    }
-    Ok(())
-}
-
-/// One action's node, points, sizes, duration and samples.
-fn check_action(action: &Action) -> anyhow::Result<()> {
-    let l = crate::mechanics::grid::CUBE_SIDE_M;
-    check("duration_s", action.duration_s(), false)?;
-    if action.duration_s() > MAX_ACTION_S {
-        anyhow::bail!("duration_s = {} s is too long (at most {MAX_ACTION_S} s)", crate::io::num(action.duration_s()));
-    }
-    match action {
-        Action::Drag { node, to, .. } => {
-            let nodes = Grid::paper().num_nodes();
-            if *node >= nodes {
-                anyhow::bail!("node {node} does not exist (0..{nodes})");
-            }
-            check_point("drag target \"to\"", to)
-        }
-        Action::Probe { at, direction, radius, depth, samples, .. } => {
-            check("radius", *radius, true)?;
-            check("depth", *depth, false)?;
-            if *radius > l || *depth > l {
-                anyhow::bail!(
-                    "probe radius {} m and depth {} m must each be at most the cube's side ({l} m); sizes are metres",
-                    crate::io::num(*radius),
-                    crate::io::num(*depth)
-                );
-            }
-            check_point("probe point \"at\"", at)?;
-            let len = DVec3::from(*direction).length();
-            if !(len.is_finite() && len > 0.0) {
-                anyhow::bail!("probe needs a finite, non-zero direction");
-            }
-            if !(1..=MAX_SAMPLES_PER_PROBE).contains(samples) {
-                anyhow::bail!("samples = {samples} is out of range (1 to {MAX_SAMPLES_PER_PROBE} per probe)");
-            }
-            Ok(())
-        }
-        Action::Release { .. } | Action::Wait { .. } => Ok(()),
-    }
-}
-
-/// The steps of the whole script at the step `dt` the policy chose, within [`MAX_TOTAL_STEPS`].
-fn check_steps(script: &Script, dt: f64) -> anyhow::Result<()> {
-    let mut total_steps = 0u64;
-    for a in &script.actions {
-        let n = steps_for(a.duration_s(), dt);
-        total_steps += match a {
-            Action::Release { .. } => 0,
-            Action::Wait { .. } => n,
-            _ => n.max(1),
-        };
-    }
-    if total_steps > MAX_TOTAL_STEPS {
-        anyhow::bail!(
-            "script: {total_steps} steps in all (at dt = {} s), above the bound of {MAX_TOTAL_STEPS} steps per script",
-            crate::io::num(dt)
-        );
-    }
-    Ok(())
-}
-
-/// The nodes the script's drags hold.
-fn drag_nodes(script: &Script) -> Vec<usize> {
-    script
-        .actions
-        .iter()
-        .filter_map(|a| match a {
-            Action::Drag { node, .. } => Some(*node),
-            _ => None,
-        })
-        .collect()
 }
 
 /// The fixed nodes and loads a script's `clamp` names.

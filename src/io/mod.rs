@@ -1,0 +1,13 @@
+//! Layer 0, files and numbers: bounded reading ([`read`]), atomic writing and output folders
+//! ([`write`]), temporary outputs removed on a signal ([`pending`]), and numbers and messages as
+//! the user reads them ([`message`]). May use nothing else of the crate.
+
+pub mod message;
+pub mod pending;
+pub mod read;
+pub mod write;
+
+pub use message::{brief_line, num};
+pub use pending::remove_pending;
+pub use read::{MAX_INPUT_BYTES, read_json, read_text};
+pub use write::{MAX_OUTPUT_BYTES, OutputDir, check_output, write_atomic, write_json_atomic, write_json_compact};
