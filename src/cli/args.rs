@@ -117,6 +117,9 @@ impl ParamArgs {
 #[derive(Debug, serde::Deserialize)]
 struct ParamsFile {
     object: Option<String>,
+    /// The lattice the file says it holds (a calibration result's `model`), checked against
+    /// `params`, never ignored.
+    model: Option<crate::mechanics::msm::Topology>,
     params: MsmParams,
 }
 
@@ -126,6 +129,17 @@ pub fn params_from_file(object: &ObjectArgs, path: &Path) -> anyhow::Result<(Mat
     let file: ParamsFile = read_json(path)?;
     let material = object.material(file.object.as_deref())?;
     file.params.validate().with_context(|| format!("in {}", path.display()))?;
+    if let Some(model) = file.model
+        && model != file.params.topology()
+    {
+        anyhow::bail!(
+            "in {}: \"model\" is {} but the parameters are those of the {} lattice (the constants given \
+             decide: axis k1..k3, shear also c12..c23, hex also b)",
+            path.display(),
+            model.name(),
+            file.params.topology().name()
+        );
+    }
     file.params
         .check_ties(material.is_transversely_isotropic())
         .with_context(|| format!("in {} (object {})", path.display(), material.name))?;

@@ -71,13 +71,19 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
         grid,
         out,
     } = args;
+    crate::io::check_output(&out)?;
     let material = object.material(None)?;
     let grid = grid.grid()?;
     let settings = Settings { method, seed, population, generations, mutation, crossover, cost, ..Settings::default() };
     settings.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let mut space = GeneSpace::new(&material, &grid, model);
+    let mut seen: Vec<&str> = Vec::new();
     for b in &bounds {
         let (name, range) = b.split_once('=').with_context(|| format!("--bound {b:?}: expected GENE=LO:HI"))?;
+        if seen.contains(&name.trim()) {
+            anyhow::bail!("--bound {} is given twice; give each gene's bounds once", name.trim());
+        }
+        seen.push(name.trim());
         let (lo, hi) = range.split_once(':').with_context(|| format!("--bound {b:?}: expected GENE=LO:HI"))?;
         let lo: f64 = lo.trim().parse().with_context(|| format!("--bound {b:?}: bad lower bound"))?;
         let hi: f64 = hi.trim().parse().with_context(|| format!("--bound {b:?}: bad upper bound"))?;

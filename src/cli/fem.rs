@@ -32,6 +32,7 @@ pub struct FemArgs {
 /// Solves the cases and writes their node displacements.
 pub fn run(args: FemArgs) -> anyhow::Result<()> {
     let FemArgs { object, bc, grid, out } = args;
+    crate::io::check_output(&out)?;
     let material = object.material(None)?;
     let grid = grid.grid()?;
     if bc == Bc::Patch {

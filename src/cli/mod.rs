@@ -83,15 +83,24 @@ pub enum Command {
 pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
-        Err(e) => {
+        Err(e) if !e.use_stderr() => {
+            // --help and --version.
             let _ = e.print();
-            return if e.use_stderr() { ExitCode::FAILURE } else { ExitCode::SUCCESS };
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            // clap's layout (tips, usage) on one line: the error and where help is.
+            let text = e.render().to_string();
+            let first = text.split("\n\n").next().unwrap_or("invalid arguments").trim_start_matches("error: ");
+            eprintln!("error: {} (tissue-sim --help)", crate::io::brief_line(first));
+            return ExitCode::FAILURE;
         }
     };
+    output::prepare_process();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", crate::io::brief_line(&format!("{e:#}")));
             ExitCode::FAILURE
         }
     }

@@ -31,6 +31,7 @@ pub struct MsmArgs {
 /// Solves the cases and writes their node displacements.
 pub fn run(args: MsmArgs) -> anyhow::Result<()> {
     let MsmArgs { object, params, grid, out } = args;
+    crate::io::check_output(&out)?;
     let material = object.material(None)?;
     let params = params.resolve(&material)?;
     let grid = grid.grid()?;

@@ -1,4 +1,5 @@
-//! Printing: standard output that tolerates a closed pipe, and progress bars on a terminal.
+//! Printing: standard output that tolerates a closed pipe, progress bars on a terminal, and the
+//! process set up before any command.
 
 /// Writes `text` and a newline to standard output ([`say_raw`]).
 pub fn say(text: &str) -> anyhow::Result<()> {
@@ -30,4 +31,22 @@ pub fn progress_bar(len: u64, unit: &str) -> indicatif::ProgressBar {
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     bar
+}
+
+/// Sets the process up before any command runs (while it is the only thread):
+/// - where `XDG_RUNTIME_DIR` is unset, points it at the temporary directory, so that the
+///   Wayland probe of the Vulkan and GL drivers finds no display quietly instead of printing
+///   "XDG_RUNTIME_DIR is invalid or not set" on every render;
+/// - SIGINT and SIGTERM remove the temporary outputs still being written
+///   ([`crate::io::remove_pending`]) and exit with status 130.
+pub fn prepare_process() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // SAFETY: called first thing in `main`, before any other thread exists (the signal
+        // handler's is started just below), so nothing reads the environment concurrently.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
+    let _ = ctrlc::set_handler(|| {
+        crate::io::remove_pending();
+        std::process::exit(130);
+    });
 }

@@ -38,6 +38,7 @@ pub struct RenderArgs {
 /// Renders the scene and writes the PNG.
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let RenderArgs { out, width, height, case, colour, model, magnify } = args;
+    crate::io::check_output(&out)?;
     scene::check_magnify(magnify)?;
     scene::check_image_size(width, height)?;
     let scene = StaticScene::new(case.as_deref(), model, colour, magnify)?;

@@ -20,6 +20,7 @@ pub struct SimulateArgs {
 
 /// Runs the script and writes node positions and tool forces.
 pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
+    crate::io::check_output(&args.out)?;
     let s: crate::study::script::Script = read_json(&args.script)?;
     let outcome = crate::study::script::run(&s).with_context(|| format!("in {}", args.script.display()))?;
     outcome.check_finite()?;

@@ -125,6 +125,24 @@ fn check_regular<'a>(path: &Path, target: &'a Path) -> anyhow::Result<(Option<st
     Ok((existing, dir))
 }
 
+/// Whether standard output was closed when the process started: the Rust runtime then reopens
+/// it on the null device, read-write, which a shell's `> /dev/null` (write-only) never does.
+fn stdout_was_closed() -> bool {
+    #[cfg(target_os = "linux")]
+    {
+        let null = std::fs::read_link("/proc/self/fd/1").is_ok_and(|p| p == Path::new("/dev/null"));
+        let read_write = std::fs::read_to_string("/proc/self/fdinfo/1").is_ok_and(|info| {
+            info.lines()
+                .find_map(|l| l.strip_prefix("flags:"))
+                .and_then(|f| u32::from_str_radix(f.trim(), 8).ok())
+                .is_some_and(|flags| flags & 0o3 == 0o2)
+        });
+        null && read_write
+    }
+    #[cfg(not(target_os = "linux"))]
+    false
+}
+
 /// Writes `bytes` to `path` without ever damaging what `path` names:
 /// - `-` writes to standard output; a device, fifo or socket (`/dev/null`, say), and a
 ///   descriptor alias (`/dev/stdout`, `/dev/fd/N`), is opened and written in place;
@@ -148,6 +166,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         Target::Stdout => {
             // Through a duplicate of the descriptor: the standard handle reports success on a
             // closed descriptor (EBADF), which would lose the output without a word.
+            if stdout_was_closed() {
+                bail!("cannot write to standard output: it was closed when the program started");
+            }
             let stdout = std::io::stdout();
             #[cfg(unix)]
             let (_lock, mut out) = {

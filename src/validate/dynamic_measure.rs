@@ -443,10 +443,14 @@ impl DynamicReport {
         }
         for e in &r.transients {
             let what = if e.transient == Transient::ProbeTap { "probe force" } else { "loaded face" };
+            let error = if e.error.is_finite() {
+                format!("{:.3} %", 100.0 * e.error)
+            } else {
+                "not measured (the step is too long to resolve it)".to_owned()
+            };
             t += &format!(
-                "trajectory error ({what}), {}: {:.3} % (FEM reference: Newmark, converged at {} s)\n",
+                "trajectory error ({what}), {}: {error} (FEM reference: Newmark, converged at {} s)\n",
                 e.transient.name(),
-                100.0 * e.error,
                 crate::io::num(e.reference_step_s)
             );
         }

@@ -40,6 +40,12 @@ pub enum StaticError {
         /// Iterations done.
         iterations: usize,
     },
+    /// The load's size is beyond what floating point represents (its norm overflows).
+    #[error("the load of {case} is beyond what floating point represents (its norm is not finite)")]
+    LoadNotFinite {
+        /// Case id.
+        case: String,
+    },
 }
 
 /// Newton solver settings.
@@ -148,6 +154,9 @@ pub fn solve_newton_with(
     let rest: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|p| grid.position(p)[c]).collect());
     let f_ext: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|p| case.load[3 * p + c]).collect());
     let f_norm = norm_free(&f_ext, &free);
+    if !f_norm.is_finite() {
+        return Err(StaticError::LoadNotFinite { case: case.id.clone() });
+    }
     let mut x = rest.clone();
     if let Some(u) = start {
         for c in 0..3 {
