@@ -1,5 +1,5 @@
 //! Layer 0, files and numbers: bounded reading ([`read`]), atomic writing and output folders
-//! ([`write`]), temporary outputs removed on a signal ([`pending`]), and numbers and messages as
+//! ([`write`](mod@write)), temporary outputs removed on a signal ([`pending`]), and numbers and messages as
 //! the user reads them ([`message`]). May use nothing else of the crate.
 
 pub mod message;
