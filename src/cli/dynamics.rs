@@ -45,9 +45,7 @@ pub struct DynamicsArgs {
 /// Measures the model and prints the report.
 pub fn run(args: DynamicsArgs) -> anyhow::Result<()> {
     let DynamicsArgs { object, params, model, integrator, dt, damping_ratio, scene, json } = args;
-    if !(dt.is_finite() && (1e-6..=0.05).contains(&dt)) {
-        anyhow::bail!("--dt {} is out of range: a time step from 1e-6 to 0.05 s", crate::io::num(dt));
-    }
+    crate::sim::check_dt(dt).map_err(|e| anyhow::anyhow!("--dt {e}"))?;
     let zeta =
         crate::response::damping::check_ratio(damping_ratio).map_err(|e| anyhow::anyhow!("--damping-ratio: {e}"))?;
     let object_args = ObjectArgs { object: Some(object.to_ascii_uppercase()), material: None };

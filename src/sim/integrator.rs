@@ -36,6 +36,23 @@ impl Integrator {
     }
 }
 
+/// The time steps a run may ask for, s: from 1 us to 50 ms.
+pub const DT_RANGE_S: std::ops::RangeInclusive<f64> = 1e-6..=0.05;
+
+/// Refuses a time step outside [`DT_RANGE_S`] (or not finite), with a message.
+pub fn check_dt(dt: f64) -> Result<(), String> {
+    if DT_RANGE_S.contains(&dt) {
+        Ok(())
+    } else {
+        Err(format!(
+            "{} is out of range: a time step from {} to {} s",
+            crate::io::num(dt),
+            crate::io::num(*DT_RANGE_S.start()),
+            crate::io::num(*DT_RANGE_S.end())
+        ))
+    }
+}
+
 /// The automatic choice runs symplectic Euler up to this fraction of its stability limit.
 pub const AUTO_EXPLICIT_FRACTION: f64 = 0.5;
 /// Symplectic Euler, asked for by name, is accepted up to this fraction of its limit.

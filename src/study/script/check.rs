@@ -41,10 +41,7 @@ pub const MAX_SAMPLES_PER_PROBE: usize = 10_000;
 /// Every check of a script that does not depend on the step, made before any work: the step, the
 /// bounds on actions and recorded events, and each action's node, points, sizes and samples.
 pub(super) fn check_script(script: &Script) -> anyhow::Result<()> {
-    check("dt", script.dt, true)?;
-    if !(1e-6..=0.05).contains(&script.dt) {
-        anyhow::bail!("script: dt = {} s is out of range (1e-6 to 0.05 s)", crate::io::num(script.dt));
-    }
+    crate::sim::check_dt(script.dt).map_err(|e| anyhow::anyhow!("script: dt = {e}"))?;
     if script.actions.len() > MAX_ACTIONS {
         anyhow::bail!("script: {} actions, above the bound of {MAX_ACTIONS}", script.actions.len());
     }
