@@ -411,3 +411,33 @@ impl Simulation {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mechanics::fem::dynamics::Formulation;
+    use crate::mechanics::material::Material;
+    use crate::sim::model::Model;
+
+    /// The viewer's FEM at its 1 ms step, with the drag counted on the lightest free node: the
+    /// automatic choice runs 4 symplectic substeps of 0.25 ms, within both limits; a script that
+    /// drags no node is bounded by the tissue alone.
+    #[test]
+    fn the_drag_is_in_the_step_and_only_where_a_drag_may_act() {
+        let material = Material::object_a();
+        let tissue = Model::Fem(Formulation::Linear).build(&material, None, 0.2).expect("fem");
+        let grid = tissue.grid();
+        let case = LoadCase::bottom_clamp(&grid, "A");
+        let mut sim = Simulation::with_tissue(tissue, Integrator::Symplectic, 1e-3, Some(&case));
+        sim.set_integrator(None, 1e-3);
+        assert_eq!((sim.integrator, sim.dt), (Integrator::Symplectic, 2.5e-4));
+        let limit = sim.limit();
+        assert!(limit.tool.is_finite() && sim.dt <= 0.9 * limit.of(Integrator::Symplectic), "{limit:?}");
+        assert!(sim.set_draggable(Vec::new()).is_ok());
+        assert_eq!(sim.limit().tool, f64::INFINITY);
+        // Asked for by name at 1 ms, prefactored Euler is refused for the corner node.
+        sim.set_integrator(Some(Integrator::Prefactored), 1e-3);
+        let why = sim.set_draggable(vec![grid.num_nodes() - 1]).expect_err("the corner's spring");
+        assert!(why.contains("dragging spring"), "{why}");
+    }
+}
