@@ -7,7 +7,6 @@ use clap::Args;
 
 use super::args::{GridArgs, ObjectArgs, params_from_file};
 use super::output::{say, say_raw};
-use crate::mechanics::fem::dynamics::Formulation;
 use crate::mechanics::sparse::DirectSolve;
 use crate::sim::Model;
 use crate::validate::touch_score;
@@ -51,8 +50,7 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
             (material, (Model::Lattice(p.topology()), Some(p)))
         }
         (None, Some(name)) => {
-            let f = if name == "fem-linear" { Formulation::Linear } else { Formulation::Corotational };
-            (object.material(None)?, (Model::Fem(f), None))
+            (object.material(None)?, (Model::try_from(name.to_owned()).map_err(anyhow::Error::msg)?, None))
         }
         (None, None) => {
             let material = object.material(None)?;

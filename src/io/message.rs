@@ -20,37 +20,56 @@ pub fn num(v: f64) -> String {
 
 /// Longest quoted text a message repeats, characters.
 const MAX_QUOTED_CHARS: usize = 60;
+/// Longest message line, characters.
+const MAX_LINE_CHARS: usize = 400;
 
-/// A message as one brief line: line breaks and runs of blanks become single spaces, and any
-/// quoted text (between `"`, `'` or backquotes) longer than 60 characters is cut, saying
-/// how long it was, so that a 100,000-character input comes back as a short error.
+/// A message as one brief line: line breaks and runs of blanks become single spaces; any text
+/// quoted between `"` or backquotes (an escaped `\"` does not close it) longer than 60 characters
+/// is cut, saying how long it was; and the line itself is cut at 400 characters. A
+/// 100,000-character input comes back as a short error.
 pub fn brief_line(message: &str) -> String {
-    let mut words = String::with_capacity(message.len().min(4096));
-    for w in message.split_whitespace() {
-        if !words.is_empty() {
-            words.push(' ');
+    let words: Vec<&str> = message.split_whitespace().collect();
+    let line = words.join(" ");
+    let mut out = String::with_capacity(line.len().min(4 * MAX_LINE_CHARS));
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        out.push(c);
+        if c != '"' && c != '`' {
+            continue;
         }
-        words.push_str(w);
-    }
-    let mut out = String::with_capacity(words.len().min(4096));
-    let mut rest = words.as_str();
-    while let Some(start) = rest.find(['"', '\'', '`']) {
-        let quote = rest[start..].chars().next().unwrap_or('"');
-        let body = &rest[start + 1..];
-        let Some(len) = body.find(quote) else { break };
-        out.push_str(&rest[..=start]);
-        let quoted = &body[..len];
-        let chars = quoted.chars().count();
-        if chars > MAX_QUOTED_CHARS {
+        let mut quoted = String::new();
+        let mut closed = false;
+        while let Some(q) = chars.next() {
+            if q == '\\' {
+                quoted.push(q);
+                if let Some(next) = chars.next() {
+                    quoted.push(next);
+                }
+                continue;
+            }
+            if q == c {
+                closed = true;
+                break;
+            }
+            quoted.push(q);
+        }
+        let count = quoted.chars().count();
+        if count > MAX_QUOTED_CHARS {
             out.extend(quoted.chars().take(MAX_QUOTED_CHARS / 2));
-            out.push_str(&format!("... ({chars} characters)"));
+            out.push_str(&format!("... ({count} characters)"));
         } else {
-            out.push_str(quoted);
+            out.push_str(&quoted);
         }
-        out.push(quote);
-        rest = &body[len + 1..];
+        if closed {
+            out.push(c);
+        }
     }
-    out.push_str(rest);
+    let count = out.chars().count();
+    if count > MAX_LINE_CHARS {
+        let mut cut: String = out.chars().take(MAX_LINE_CHARS - 40).collect();
+        cut.push_str(&format!("... ({count} characters in all)"));
+        return cut;
+    }
     out
 }
 
@@ -81,5 +100,14 @@ mod tests {
         assert!(m.starts_with("unknown object \"xxx") && m.ends_with("characters)\": the presets are A and B"), "{m}");
         assert_eq!(brief_line("a `b` 'c' \"d\" e"), "a `b` 'c' \"d\" e");
         assert_eq!(brief_line("it's \"open"), "it's \"open");
+        // Apostrophes far apart are prose, not a quotation.
+        let prose = format!("the paper's lattice {}keeps the paper's d", "word ".repeat(20));
+        assert_eq!(brief_line(&prose), prose);
+        // An escaped quote does not end a quotation; an unclosed one is still cut; so is the line.
+        let escaped = brief_line(&format!("object \"a\\\"{long}\": no"));
+        assert!(escaped.len() < 200 && escaped.ends_with("characters)\": no"), "{escaped}");
+        assert!(brief_line(&format!("x \"{long}")).len() < 200);
+        assert!(brief_line(&"ab ".repeat(50_000)).chars().count() <= 400);
+        assert_eq!(brief_line("é \"ü\" ß"), "é \"ü\" ß");
     }
 }

@@ -126,8 +126,8 @@ impl StepLimit {
 }
 
 /// The integrator policy at a fixed step: `requested` (or the automatic choice for `None`:
-/// symplectic at most [`AUTO_EXPLICIT_FRACTION`] of its limit, prefactored implicit otherwise),
-/// refused with a message above [`MAX_EXPLICIT_FRACTION`] of the chosen integrator's limit.
+/// symplectic where [`StepLimit::auto_allows`] it, prefactored implicit otherwise), refused with
+/// the message of [`StepLimit::refusal`].
 pub fn choose_integrator(requested: Option<Integrator>, dt: f64, limit: StepLimit) -> Result<Integrator, String> {
     let i = requested.unwrap_or(if limit.auto_allows(Integrator::Symplectic, dt) {
         Integrator::Symplectic
@@ -174,13 +174,13 @@ pub fn predicted_error(integrator: Integrator, h: f64, damping: Damping) -> Opti
 
 /// The step policy: the integrator and step for the step `dt` asked for.
 ///
-/// * An integrator asked for by name runs at `dt` ([`choose_integrator`]'s rule).
-/// * The automatic choice (`None`) for a model damped by a ratio takes the fewest substeps
-///   `dt / k` (`k <= MAX_AUTO_SUBSTEPS`) at which an integrator meets `budget` on the
-///   fundamental, symplectic Euler also staying within [`AUTO_EXPLICIT_FRACTION`] of its
-///   `limit`; symplectic Euler wins a tie (its step is the cheaper). When none meets it, the
-///   prefactored step at `dt`, with a note. For the paper's nodal damping (no fundamental known)
-///   it is [`choose_integrator`]'s stability rule at `dt`.
+/// * An integrator asked for by name runs at `dt`, or is refused ([`StepLimit::refusal`]).
+/// * The automatic choice (`None`) takes the fewest substeps `dt / k` (`k <= MAX_AUTO_SUBSTEPS`)
+///   at which an integrator is stable ([`StepLimit::auto_allows`]: the tissue and the dragging
+///   spring) and, for a model damped by a ratio, meets `budget` on the fundamental; symplectic
+///   Euler wins a tie (its step is the cheaper). When the budget is out of reach, the fewest
+///   stable prefactored substeps, with a note; when even `dt / MAX_AUTO_SUBSTEPS` is unstable, a
+///   refusal.
 ///
 /// Returns the integrator, the step and a note for the user.
 pub fn choose_step(
@@ -193,10 +193,12 @@ pub fn choose_step(
     let meets = |i: Integrator, h: f64| {
         predicted_error(i, h, damping).is_some_and(|(p, d)| p <= budget.period && d <= budget.damping)
     };
-    if requested.is_some() || damping.omega_1().is_none() {
-        let i = choose_integrator(requested, dt, limit)?;
-        let note = match predicted_error(i, dt, damping) {
-            Some((p, d)) if !meets(i, dt) => Some(format!(
+    if let Some(i) = requested {
+        if let Some(why) = limit.refusal(i, dt) {
+            return Err(why);
+        }
+        let note = predicted_error(i, dt, damping).filter(|_| !meets(i, dt)).map(|(p, d)| {
+            format!(
                 "{} at dt = {} s misses the dynamic budget on the fundamental: period error {:.2} % (budget {:.1} %), \
                  damping error {:.2} % of critical (budget {:.1} %)",
                 i.name(),
@@ -205,15 +207,16 @@ pub fn choose_step(
                 100.0 * budget.period,
                 100.0 * d,
                 100.0 * budget.damping
-            )),
-            _ => None,
-        };
+            )
+        });
         return Ok((i, dt, note));
     }
+    // With no fundamental known (the paper's nodal damping) stability alone decides.
+    let budgeted = damping.omega_1().is_some();
     let first = |i: Integrator| {
         (1..=MAX_AUTO_SUBSTEPS).find(|&k| {
             let h = dt / k as f64;
-            limit.auto_allows(i, h) && meets(i, h)
+            limit.auto_allows(i, h) && (!budgeted || meets(i, h))
         })
     };
     let choice = match (first(Integrator::Symplectic), first(Integrator::Prefactored)) {
@@ -222,30 +225,33 @@ pub fn choose_step(
         (None, Some(i)) => Some((Integrator::Prefactored, i)),
         (None, None) => None,
     };
+    let keeps = if budgeted {
+        format!(
+            "keeps the fundamental's period within {:.1} % and its damping within {:.1} % of critical",
+            100.0 * budget.period,
+            100.0 * budget.damping
+        )
+    } else {
+        "keeps the tissue and the dragging spring stable".to_owned()
+    };
     Ok(match choice {
         Some((i, 1)) => (i, dt, None),
         Some((i, k)) => {
             let h = dt / k as f64;
-            (
-                i,
-                h,
-                Some(format!(
-                    "automatic: {} at {} s ({k} substeps of the {} s asked for) keeps the fundamental's period \
-                     within {:.1} % and its damping within {:.1} % of critical",
-                    i.name(),
-                    crate::io::num(h),
-                    crate::io::num(dt),
-                    100.0 * budget.period,
-                    100.0 * budget.damping
-                )),
-            )
+            let (h_s, dt_s) = (crate::io::num(h), crate::io::num(dt));
+            (i, h, Some(format!("automatic: {} at {h_s} s ({k} substeps of the {dt_s} s asked for) {keeps}", i.name())))
         }
         None => {
             // The budget is out of reach: the fewest prefactored substeps the tool allows.
             let stable = |k: &usize| limit.auto_allows(Integrator::Prefactored, dt / *k as f64);
             let Some(k) = (1..=MAX_AUTO_SUBSTEPS).find(stable) else {
                 let h = dt / MAX_AUTO_SUBSTEPS as f64;
-                return Err(limit.refusal(Integrator::Prefactored, h).unwrap_or_default());
+                return Err(format!(
+                    "even dt / {MAX_AUTO_SUBSTEPS} = {} s is above {MAX_EXPLICIT_FRACTION} x the stability limit of \
+                     about {} s of the dragging spring on the lightest node it holds",
+                    crate::io::num(h),
+                    crate::io::num(limit.tool)
+                ));
             };
             let h = dt / k as f64;
             (

@@ -98,7 +98,8 @@ impl TryFrom<String> for Model {
     type Error = String;
     fn try_from(s: String) -> Result<Self, String> {
         Model::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| {
-            format!("unknown model {s:?}: the models are axis, shear, hex, fem-linear and fem-corotational")
+            let known: Vec<String> = Model::ALL.iter().map(|m| m.name()).collect();
+            format!("unknown model {s:?}: the models are {}", known.join(", "))
         })
     }
 }

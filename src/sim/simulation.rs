@@ -137,8 +137,9 @@ impl Simulation {
         )
     }
 
-    /// Sets the integrator and step by [`choose_step`] (the automatic choice meets
-    /// the viewer's dynamic budget ([`DEFAULT_DYNAMIC_BUDGET`])); on a refusal switches to prefactored implicit Euler and says so.
+    /// Sets the integrator and step by [`choose_step`] (the automatic choice meets the viewer's
+    /// dynamic budget, [`DEFAULT_DYNAMIC_BUDGET`]); on a refusal switches to the automatic
+    /// choice (prefactored implicit Euler at `dt` if even that refuses) and says so.
     /// The request is kept: new parameters or damping apply the policy again.
     pub fn set_integrator(&mut self, requested: Option<Integrator>, dt: f64) -> Option<String> {
         self.requested = requested;
@@ -148,10 +149,16 @@ impl Simulation {
                 (self.integrator, self.dt) = (i, h);
                 note
             }
-            Err(why) => {
-                (self.integrator, self.dt) = (Integrator::Prefactored, dt);
-                Some(format!("{why}: switched to prefactored implicit Euler"))
-            }
+            Err(why) => match choose_step(None, dt, self.limit(), self.tissue.damping(), DEFAULT_DYNAMIC_BUDGET) {
+                Ok((i, h, _)) => {
+                    (self.integrator, self.dt) = (i, h);
+                    Some(format!("{why}: switched to the automatic choice, {} at {} s", i.name(), crate::io::num(h)))
+                }
+                Err(_) => {
+                    (self.integrator, self.dt) = (Integrator::Prefactored, dt);
+                    Some(format!("{why}: switched to prefactored implicit Euler"))
+                }
+            },
         }
     }
 

@@ -78,12 +78,8 @@ impl ChartOptions {
 /// The mass-proportional rate of `kind` for `material`: the chart's damping ratio at the
 /// model's own 8^3 fundamental.
 fn damping_rate(material: &Material, kind: Model) -> anyhow::Result<f64> {
-    let choice = match kind {
-        Model::Lattice(t) => crate::sim::Model::Lattice(t),
-        Model::Fem(f) => crate::sim::Model::Fem(f),
-    };
     // The running tissue's own rate (its one home: `Tissue::set_damping_ratio`).
-    Ok(choice.build(material, None, CHART_DAMPING_RATIO)?.damping().rate())
+    Ok(kind.build(material, None, CHART_DAMPING_RATIO)?.damping().rate())
 }
 
 /// The FEM's dynamic reference of `material` at the chart's damping ratio, with a note on how
@@ -146,7 +142,7 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
                 }
                 progress(&format!(
                     "object {object}: {} at {n}^3 ({:.1} s)",
-                    kind.name(),
+                    kind.chart_name(),
                     start.elapsed().as_secs_f64()
                 ));
                 let refs = (&reference[..], touch.as_ref(), dynamics.as_ref());

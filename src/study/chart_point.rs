@@ -48,7 +48,7 @@ mod chart_names {
     pub fn deserialize_model<'de, D: Deserializer<'de>>(d: D) -> Result<Model, D::Error> {
         let name = String::deserialize(d)?;
         Model::from_chart_name(&name).ok_or_else(|| {
-            let known: Vec<String> = Model::ALL.iter().map(|k| k.chart_name()).collect();
+            let known: Vec<String> = super::CHART_ORDER.iter().map(|k| k.chart_name()).collect();
             D::Error::custom(format!("unknown model {name:?} (expected one of {})", known.join(", ")))
         })
     }

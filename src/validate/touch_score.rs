@@ -131,6 +131,11 @@ pub fn responder(
     match model {
         Model::Lattice(topology) => {
             let params = match params {
+                Some(p) if p.topology() != topology => anyhow::bail!(
+                    "the {} lattice was asked for with the parameters of the {} lattice",
+                    topology.name(),
+                    p.topology().name()
+                ),
                 Some(p) => p,
                 None => crate::sim::shipped::tissue_params(material, topology)?,
             };

@@ -9,7 +9,7 @@ use crate::mechanics::grid::Grid;
 fn check(name: &str, v: f64, positive: bool) -> anyhow::Result<()> {
     if !v.is_finite() || v < 0.0 || (positive && v == 0.0) {
         anyhow::bail!(
-            "script: {name} must be a {} finite number, got {}",
+            "{name} must be a {} finite number, got {}",
             if positive { "positive" } else { "non-negative" },
             crate::io::num(v)
         );
@@ -23,11 +23,11 @@ fn check_point(what: &str, p: &[f64; 3]) -> anyhow::Result<()> {
     let l = crate::mechanics::grid::CUBE_SIDE_M;
     for (c, v) in p.iter().enumerate() {
         if !v.is_finite() {
-            anyhow::bail!("script: {what}[{c}] is not finite");
+            anyhow::bail!("{what}[{c}] is not finite");
         }
         if !(-l..=2.0 * l).contains(v) {
             anyhow::bail!(
-                "script: {what} = {p:?} lies outside the cube's neighbourhood: coordinates are metres, the cube spans \
+                "{what} = {p:?} lies outside the cube's neighbourhood: coordinates are metres, the cube spans \
                  0 to {l} m, and points must lie within {l} m of it"
             );
         }
@@ -42,6 +42,9 @@ pub const MAX_SAMPLES_PER_PROBE: usize = 10_000;
 /// bounds on actions and recorded events, and each action's node, points, sizes and samples.
 pub(super) fn check_script(script: &Script) -> anyhow::Result<()> {
     crate::sim::check_dt(script.dt).map_err(|e| anyhow::anyhow!("script: dt = {e}"))?;
+    if let Some(i) = script.integrator {
+        script.model.check_integrator(i).map_err(|e| anyhow::anyhow!("script: {e}"))?;
+    }
     if script.actions.len() > MAX_ACTIONS {
         anyhow::bail!("script: {} actions, above the bound of {MAX_ACTIONS}", script.actions.len());
     }
