@@ -41,11 +41,8 @@ pub enum StaticError {
         iterations: usize,
     },
     /// The load's size is beyond what floating point represents (its norm overflows).
-    #[error("the load of {case} is beyond what floating point represents (its norm is not finite)")]
-    LoadNotFinite {
-        /// Case id.
-        case: String,
-    },
+    #[error("the load is beyond what floating point represents (its norm is not finite)")]
+    LoadNotFinite,
 }
 
 /// Newton solver settings.
@@ -155,7 +152,7 @@ pub fn solve_newton_with(
     let f_ext: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|p| case.load[3 * p + c]).collect());
     let f_norm = norm_free(&f_ext, &free);
     if !f_norm.is_finite() {
-        return Err(StaticError::LoadNotFinite { case: case.id.clone() });
+        return Err(StaticError::LoadNotFinite);
     }
     let mut x = rest.clone();
     if let Some(u) = start {
