@@ -209,8 +209,18 @@ fn messages_are_brief_and_plain() {
     let o = dir.path().join("o.json");
     let long = write(dir.path(), "long.json", &format!(r#"{{"object":"{}","actions":[]}}"#, "A".repeat(100_000)));
     refused(&["simulate", "--script", s(&long), "--out", s(&o)], "object", 1.0);
-    let msg = refused(&["errors", "--object", "A", "--k1", "1e308", "--k2", "1e308", "--k3", "1e308"], "k1", 5.0);
-    assert!(!msg.contains("000000000"), "{msg}");
+    let o = s(&o).to_owned();
+    let huge: [(Vec<&str>, &str); 5] = [
+        (vec!["errors", "--object", "A", "--k1", "1e308", "--k2", "1e308", "--k3", "1e308"], "k1"),
+        (vec!["render", "--magnify", "-1e308", "--out", &o], "magnify"),
+        (vec!["choose", "--rate", "1e308"], "rate"),
+        (vec!["choose", "--max-error", "-1e-300"], "max-error"),
+        (vec!["calibrate", "--object", "A", "--mutation", "1e308", "--out", &o], "mutation"),
+    ];
+    for (args, needle) in huge {
+        let msg = refused(&args, needle, 5.0);
+        assert!(!msg.contains("000000000"), "{msg}");
+    }
     refused(&["fem", "--object", "A", "--nodes", "x"], "--nodes", 1.0);
     refused(&["fem", "--object"], "--object", 1.0);
     refused(&["nonsense"], "nonsense", 1.0);

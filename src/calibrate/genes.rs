@@ -98,7 +98,11 @@ impl GeneSpace {
             .position(|n| n == name)
             .ok_or_else(|| format!("no gene {name:?}; the genes are {}", self.names.join(", ")))?;
         if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
-            return Err(format!("bounds of {name} must satisfy 0 <= lo < hi, got {lo}:{hi}"));
+            return Err(format!(
+                "bounds of {name} must satisfy 0 <= lo < hi, got {}:{}",
+                crate::io::num(lo),
+                crate::io::num(hi)
+            ));
         }
         if name.starts_with('k') && lo <= 0.0 {
             return Err(format!("the lower bound of {name} must be positive (an axis spring needs stiffness)"));

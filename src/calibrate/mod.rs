@@ -140,14 +140,14 @@ impl Settings {
         }
         for (name, p) in [("mutation", self.mutation), ("crossover", self.crossover)] {
             if !(0.0..=1.0).contains(&p) {
-                return Err(format!("{name} probability must be in [0, 1], got {p}"));
+                return Err(format!("{name} probability must be in [0, 1], got {}", crate::io::num(p)));
             }
         }
         if self.sa_iterations == 0 {
             return Err("sa_iterations must be at least 1".into());
         }
         if !(self.t_final_ratio > 0.0 && self.t_final_ratio < 1.0) {
-            return Err(format!("t_final_ratio must be in (0, 1), got {}", self.t_final_ratio));
+            return Err(format!("t_final_ratio must be in (0, 1), got {}", crate::io::num(self.t_final_ratio)));
         }
         Ok(())
     }

@@ -23,12 +23,25 @@ const MAX_QUOTED_CHARS: usize = 60;
 /// Longest message line, characters.
 const MAX_LINE_CHARS: usize = 400;
 
+/// A word that is a long numeral (`1000...0`, `-0.000...1`, with trailing punctuation) in short
+/// form ([`num`]); any other word as it is.
+fn short_numeral(word: &str) -> String {
+    let body = word.trim_end_matches([',', ';', ':', ')', '.']);
+    let (number, tail) = word.split_at(body.len());
+    match number.parse::<f64>() {
+        Ok(v) if number.len() > 16 && number.bytes().all(|b| b.is_ascii_digit() || b"+-.eE".contains(&b)) => {
+            format!("{}{tail}", num(v))
+        }
+        _ => word.to_owned(),
+    }
+}
+
 /// A message as one brief line: line breaks and runs of blanks become single spaces; any text
 /// quoted between `"` or backquotes (an escaped `\"` does not close it) longer than 60 characters
 /// is cut, saying how long it was; and the line itself is cut at 400 characters. A
 /// 100,000-character input comes back as a short error.
 pub fn brief_line(message: &str) -> String {
-    let words: Vec<&str> = message.split_whitespace().collect();
+    let words: Vec<String> = message.split_whitespace().map(short_numeral).collect();
     let line = words.join(" ");
     let mut out = String::with_capacity(line.len().min(4 * MAX_LINE_CHARS));
     let mut chars = line.chars().peekable();
@@ -109,5 +122,9 @@ mod tests {
         assert!(brief_line(&format!("x \"{long}")).len() < 200);
         assert!(brief_line(&"ab ".repeat(50_000)).chars().count() <= 400);
         assert_eq!(brief_line("é \"ü\" ß"), "é \"ü\" ß");
+        // Long numerals, wherever they come from, in short form.
+        let huge = format!("got {}, and {}.", 1e308, -1e-300);
+        assert_eq!(brief_line(&huge), "got 1e308, and -1e-300.");
+        assert_eq!(brief_line("at 0.0001 s, 12345 nodes"), "at 0.0001 s, 12345 nodes");
     }
 }

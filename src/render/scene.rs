@@ -140,7 +140,7 @@ impl StaticScene {
 /// Checks a drawing magnification: a non-negative number (the message names `render`'s flag).
 pub fn check_magnify(magnify: f64) -> anyhow::Result<()> {
     if !(magnify.is_finite() && magnify >= 0.0) {
-        anyhow::bail!("--magnify must be a non-negative number, got {magnify}");
+        anyhow::bail!("--magnify must be a non-negative number, got {}", crate::io::num(magnify));
     }
     Ok(())
 }

@@ -246,7 +246,7 @@ impl Budget {
     pub fn check(&self) -> anyhow::Result<()> {
         let f = self.max_force_error_pct;
         if !(f.is_finite() && f > 0.0) {
-            anyhow::bail!("--max-force-error must be a positive percentage, got {f}");
+            anyhow::bail!("--max-force-error must be a positive percentage, got {}", crate::io::num(f));
         }
         for (flag, value) in [
             ("--max-error", self.max_error_pct),
@@ -256,12 +256,12 @@ impl Budget {
             if let Some(v) = value
                 && !(v.is_finite() && v > 0.0)
             {
-                anyhow::bail!("{flag} must be a positive percentage, got {v}");
+                anyhow::bail!("{flag} must be a positive percentage, got {}", crate::io::num(v));
             }
         }
         let rate = self.rate_hz;
         if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
-            anyhow::bail!("--rate must be a positive rate in Hz (at most 1e7), got {rate}");
+            anyhow::bail!("--rate must be a positive rate in Hz (at most 1e7), got {}", crate::io::num(rate));
         }
         Ok(())
     }
