@@ -21,11 +21,11 @@ pub enum Model {
 }
 
 impl Model {
-    /// Every model, lattices first.
+    /// Every model, cheapest first (the chart's order; the panel's colours follow it).
     pub const ALL: [Model; 5] = [
-        Model::Lattice(Topology::Hex),
-        Model::Lattice(Topology::Shear),
         Model::Lattice(Topology::Axis),
+        Model::Lattice(Topology::Shear),
+        Model::Lattice(Topology::Hex),
         Model::Fem(Formulation::Linear),
         Model::Fem(Formulation::Corotational),
     ];

@@ -126,29 +126,27 @@ impl Simulation {
     }
 
     /// Restricts the drag to `nodes` (a script's, known before it runs; by default any free node
-    /// may be held) and applies the step policy again (what it says, or why it refuses).
-    pub fn set_draggable(&mut self, nodes: Vec<usize>) -> Result<Option<String>, String> {
+    /// may be held); the step policy applied next counts only these.
+    pub fn set_draggable(&mut self, nodes: Vec<usize>) {
         self.draggable = Some(nodes);
-        choose_step(self.requested, self.requested_dt, self.limit(), self.tissue.damping(), DEFAULT_DYNAMIC_BUDGET).map(
-            |(i, h, note)| {
-                (self.integrator, self.dt) = (i, h);
-                note
-            },
-        )
     }
 
     /// Sets the integrator and step by [`choose_step`] (the automatic choice meets the viewer's
-    /// dynamic budget, [`DEFAULT_DYNAMIC_BUDGET`]); on a refusal switches to the automatic
-    /// choice (prefactored implicit Euler at `dt` if even that refuses) and says so.
-    /// The request is kept: new parameters or damping apply the policy again.
-    pub fn set_integrator(&mut self, requested: Option<Integrator>, dt: f64) -> Option<String> {
+    /// dynamic budget, [`DEFAULT_DYNAMIC_BUDGET`]), or says why it refuses (nothing changed but
+    /// the request, which new parameters or damping apply again). Returns what the policy says.
+    pub fn try_set_integrator(&mut self, requested: Option<Integrator>, dt: f64) -> Result<Option<String>, String> {
         self.requested = requested;
         self.requested_dt = dt;
-        match choose_step(requested, dt, self.limit(), self.tissue.damping(), DEFAULT_DYNAMIC_BUDGET) {
-            Ok((i, h, note)) => {
-                (self.integrator, self.dt) = (i, h);
-                note
-            }
+        let (i, h, note) = choose_step(requested, dt, self.limit(), self.tissue.damping(), DEFAULT_DYNAMIC_BUDGET)?;
+        (self.integrator, self.dt) = (i, h);
+        Ok(note)
+    }
+
+    /// [`Simulation::try_set_integrator`]; on a refusal switches to the automatic choice
+    /// (prefactored implicit Euler at `dt` if even that refuses) and says so.
+    pub fn set_integrator(&mut self, requested: Option<Integrator>, dt: f64) -> Option<String> {
+        match self.try_set_integrator(requested, dt) {
+            Ok(note) => note,
             Err(why) => match choose_step(None, dt, self.limit(), self.tissue.damping(), DEFAULT_DYNAMIC_BUDGET) {
                 Ok((i, h, _)) => {
                     (self.integrator, self.dt) = (i, h);
@@ -440,11 +438,12 @@ mod tests {
         assert_eq!((sim.integrator, sim.dt), (Integrator::Symplectic, 2.5e-4));
         let limit = sim.limit();
         assert!(limit.tool.is_finite() && sim.dt <= 0.9 * limit.of(Integrator::Symplectic), "{limit:?}");
-        assert!(sim.set_draggable(Vec::new()).is_ok());
+        sim.set_draggable(Vec::new());
+        assert!(sim.try_set_integrator(None, 1e-3).is_ok());
         assert_eq!(sim.limit().tool, f64::INFINITY);
         // Asked for by name at 1 ms, prefactored Euler is refused for the corner node.
-        sim.set_integrator(Some(Integrator::Prefactored), 1e-3);
-        let why = sim.set_draggable(vec![grid.num_nodes() - 1]).expect_err("the corner's spring");
+        sim.set_draggable(vec![grid.num_nodes() - 1]);
+        let why = sim.try_set_integrator(Some(Integrator::Prefactored), 1e-3).expect_err("the corner's spring");
         assert!(why.contains("dragging spring"), "{why}");
     }
 }

@@ -19,9 +19,7 @@ use std::time::Instant;
 
 pub use super::chart_measure::{ERROR_UNIT_M, msm_params_at, sample};
 use super::chart_measure::{MAX_COUPLED_IMPLICIT_N, cases, errors, model_points, sampled};
-pub use super::chart_point::{
-    CHART_DAMPING_RATIO, CHART_ORDER, CHARTED, ChartPoint, IMPLICIT_STEPS_S, integrator_chart_name,
-};
+pub use super::chart_point::{CHART_DAMPING_RATIO, CHARTED, ChartPoint, IMPLICIT_STEPS_S, integrator_chart_name};
 pub use super::pareto::{crossing, mark_pareto};
 use crate::mechanics::fem::FemModel;
 use crate::mechanics::grid::Grid;

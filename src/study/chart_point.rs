@@ -16,15 +16,6 @@ pub const CHARTED: [Model; 4] = [
     Model::Fem(Formulation::Corotational),
 ];
 
-/// Every model in the chart's order, cheapest first (the panel's colours follow it).
-pub const CHART_ORDER: [Model; 5] = [
-    Model::Lattice(Topology::Axis),
-    Model::Lattice(Topology::Shear),
-    Model::Lattice(Topology::Hex),
-    Model::Fem(Formulation::Linear),
-    Model::Fem(Formulation::Corotational),
-];
-
 /// The integrator of a chart point in the chart's files: `explicit` (symplectic Euler) or
 /// `implicit` (prefactored backward Euler).
 pub fn integrator_chart_name(integrator: Integrator) -> &'static str {
@@ -48,7 +39,7 @@ mod chart_names {
     pub fn deserialize_model<'de, D: Deserializer<'de>>(d: D) -> Result<Model, D::Error> {
         let name = String::deserialize(d)?;
         Model::from_chart_name(&name).ok_or_else(|| {
-            let known: Vec<String> = super::CHART_ORDER.iter().map(|k| k.chart_name()).collect();
+            let known: Vec<String> = Model::ALL.iter().map(|k| k.chart_name()).collect();
             D::Error::custom(format!("unknown model {name:?} (expected one of {})", known.join(", ")))
         })
     }
@@ -58,11 +49,12 @@ mod chart_names {
     }
 
     pub fn deserialize_integrator<'de, D: Deserializer<'de>>(d: D) -> Result<Integrator, D::Error> {
-        match String::deserialize(d)?.as_str() {
-            "explicit" => Ok(Integrator::Symplectic),
-            "implicit" => Ok(Integrator::Prefactored),
-            other => Err(D::Error::custom(format!("unknown variant `{other}`, expected `explicit` or `implicit`"))),
-        }
+        // The chart's two schemes, by the names [`super::integrator_chart_name`] gives them.
+        let name = String::deserialize(d)?;
+        [Integrator::Symplectic, Integrator::Prefactored]
+            .into_iter()
+            .find(|i| super::integrator_chart_name(*i) == name)
+            .ok_or_else(|| D::Error::custom(format!("unknown variant `{name}`, expected `explicit` or `implicit`")))
     }
 }
 

@@ -5,7 +5,8 @@ use egui_plot::{Corner, Legend, MarkerShape, Plot, PlotPoints, Points};
 
 use crate::app::worker::{Slot, State};
 use crate::sim::Integrator;
-use crate::study::chart::{CHART_ORDER, ChartOptions, ChartPoint, compute};
+use crate::sim::Model;
+use crate::study::chart::{ChartOptions, ChartPoint, compute};
 use crate::study::choose::{Budget, Choice, Metric, choose};
 
 const COLOURS: [egui::Color32; 5] = [
@@ -206,7 +207,7 @@ fn speed_accuracy_plot(ui: &mut egui::Ui, mine: &[&ChartPoint]) {
         .x_axis_label("log10 wall time per simulated s; circle explicit, triangle implicit")
         .y_axis_label("log10 avg error (% of h)")
         .show(ui, |plot| {
-            for (i, kind) in CHART_ORDER.iter().enumerate() {
+            for (i, kind) in Model::ALL.iter().enumerate() {
                 let name = kind.chart_name();
                 for (integrator, shape) in
                     [(Integrator::Symplectic, MarkerShape::Circle), (Integrator::Prefactored, MarkerShape::Up)]

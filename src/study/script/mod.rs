@@ -238,8 +238,8 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     let case = clamp_case(&grid, &material.name, &script.clamp)?;
     let mut sim = Simulation::with_tissue(tissue, Integrator::Symplectic, script.dt, case.as_ref());
     // The viewer's step policy, with the script's drags in it: refused before the first step.
-    sim.set_integrator(script.integrator, script.dt);
-    let note = sim.set_draggable(drag_nodes(script)).map_err(|why| {
+    sim.set_draggable(drag_nodes(script));
+    let note = sim.try_set_integrator(script.integrator, script.dt).map_err(|why| {
         anyhow::anyhow!("script: {why}; lower dt, or leave \"integrator\" out (the automatic choice substeps dt)")
     })?;
     let integrator = sim.integrator;
