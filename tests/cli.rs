@@ -452,6 +452,11 @@ fn validate_prints_the_touch_benchmark_contract() {
             assert!(!c[key].is_null(), "case without {key}");
         }
     }
+    // The probe against the material: the viewer's surface contact, every press scored.
+    let material = &v["material"];
+    assert_eq!(material["contact"], "surface");
+    assert_eq!(material["cases"].as_array().expect("presses").len(), 36);
+    assert!(material["worst_error"].as_f64().is_some_and(|e| e < 0.07), "{}", material["worst_error"]);
     let modes = v["modes_hz"].as_array().expect("modes");
     assert_eq!(modes.len(), 6);
     assert!(modes.windows(2).all(|w| w[0].as_f64() <= w[1].as_f64()), "modes not ascending");
@@ -471,6 +476,7 @@ fn validate_prints_the_touch_benchmark_contract() {
         "--model",
         "fem-linear",
         "--json",
+        "--own-mesh-only",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");

@@ -54,6 +54,9 @@ pub enum Command {
     Reset,
     /// Replace the whole simulation (another object or model).
     Replace(Replacement),
+    /// The probe's contact: the material's surface compliance (`Some`, kept across
+    /// replacements of the same material) or the model's surface nodes (`None`).
+    SetSurfaceProbe(Option<Arc<crate::response::surface_compliance::SurfaceCompliance>>),
 }
 
 /// How fast the physics runs, over the last wall-clock second.
@@ -106,6 +109,8 @@ pub struct Published {
     pub running_s: f64,
     /// Counts changes of `message` and `note` (the UI redraws when it moves).
     pub revision: u64,
+    /// Whether the probe's force comes from the material's surface compliance.
+    pub surface_probe: bool,
 }
 
 /// The physics thread died (the channel is closed).
@@ -187,6 +192,7 @@ impl PhysicsThread {
             into.moving = p.moving;
             into.tool_commands = p.tool_commands;
             into.revision = p.revision;
+            into.surface_probe = p.surface_probe;
         }
     }
 }
@@ -199,6 +205,19 @@ struct Loop {
     /// After the guard gives up (a fatal blow-up) stepping pauses until the user acts.
     paused: bool,
     owed: f64,
+    /// The material's surface compliance for the probe, when the viewer has one.
+    compliance: Option<Arc<crate::response::surface_compliance::SurfaceCompliance>>,
+}
+
+impl Loop {
+    /// The probe of the running simulation on the kept surface compliance, if any.
+    fn attach_surface_probe(&self, sim: &mut Simulation) {
+        let probe = self
+            .compliance
+            .as_ref()
+            .map(|c| crate::sim::surface_probe::SurfaceProbe::new(Arc::clone(c), sim.tissue.grid()));
+        sim.set_surface_probe(probe);
+    }
 }
 
 impl Loop {
@@ -226,12 +245,17 @@ impl Loop {
             Command::Replace(r) => match (r.recipe)() {
                 Ok(tissue) => {
                     *sim = Simulation::with_tissue(tissue, Integrator::Symplectic, r.dt, Some(&r.case));
+                    self.attach_surface_probe(sim);
                     self.note = sim.set_integrator(r.integrator, r.dt);
                     self.message = None;
                     self.owed = 0.0;
                 }
                 Err(e) => self.note = Some(format!("cannot build the model: {e}")),
             },
+            Command::SetSurfaceProbe(c) => {
+                self.compliance = c;
+                self.attach_surface_probe(sim);
+            }
         }
     }
 }
@@ -263,6 +287,7 @@ fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop,
         p.moving = !state.paused && (sim.tool != Tool::None || sim.tissue.kinetic_energy() > 1e-12);
         p.tool_commands = state.tools;
         (p.ticks_total, p.steps_total, p.running_s) = totals;
+        p.surface_probe = sim.has_surface_probe();
     }
 }
 
@@ -274,7 +299,7 @@ fn run(
 ) {
     let start = Instant::now();
     let mut next = start;
-    let mut state = Loop { message: None, note, tools: 0, paused: false, owed: 0.0 };
+    let mut state = Loop { message: None, note, tools: 0, paused: false, owed: 0.0, compliance: None };
     let (mut window_start, mut ticks, mut steps, mut busy) = (Instant::now(), 0u64, 0u64, Duration::ZERO);
     let mut rates = Rates::default();
     let (mut ticks_total, mut steps_total) = (0u64, 0u64);

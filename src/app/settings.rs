@@ -84,6 +84,8 @@ impl Default for ViewSettings {
 pub struct Shown {
     /// The material.
     pub material: Material,
+    /// The probe's contact: what the surface compliance job says (`None`: ready or not asked).
+    pub contact_status: Option<String>,
     /// The parameters of the running model (the panel edits a copy).
     pub params: MsmParams,
     /// Integrator asked for (`None`: automatic).

@@ -166,7 +166,11 @@ impl App {
     fn frame(&mut self) -> anyhow::Result<()> {
         self.physics.latest(&mut self.latest);
         self.drawn_revision = self.latest.revision;
-        self.state.poll();
+        let physics = &self.physics;
+        self.state.poll(&mut |c| {
+            // A stopped physics thread is reported by its own poll.
+            let _ = physics.send(c);
+        });
         let Some(full) = self.run_ui() else { return Ok(()) };
         let sent = self.stats.tools_sent;
         self.handle_requests();

@@ -32,11 +32,23 @@ pub struct ValidateArgs {
     /// Print JSON (the benchmark's contract) instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Where the material's probe forces are kept (default: $XDG_CACHE_HOME/tissue-sim, else
+    /// ~/.cache/tissue-sim). The paper's objects ship theirs.
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+    /// Score against the same-mesh FEM only, not the probe presses against the material.
+    #[arg(long)]
+    pub own_mesh_only: bool,
+    /// How the probe touches in the presses against the material: `surface` (the viewer's: the
+    /// material's surface compliance on a 2.5 mm grid of the top face, computed once per
+    /// material, about 25 s, and kept in the cache folder) or `nodes` (the model's surface nodes).
+    #[arg(long, value_parser = ["surface", "nodes"], default_value = "surface")]
+    pub contact: String,
 }
 
 /// Scores the model against the same-mesh FEM and prints the report.
 pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
-    let ValidateArgs { object, material, grid, params, model, json } = args;
+    let ValidateArgs { object, material, grid, params, model, json, cache, own_mesh_only, contact } = args;
     let label = object.as_ref().map(|o| o.to_ascii_uppercase());
     // A material file replaces the object's constants; the object then only labels the report.
     let object = match material {
@@ -63,8 +75,63 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
     let reference = touch_score::Reference::new(&material, grid)?;
     let mut report = touch_score::evaluate(&reference, &material, model.0, model.1)
         .with_context(|| format!("scoring {} of material {}", model.0.name(), material.name))?;
+    if !own_mesh_only {
+        report.material = Some(against_material(&material, grid, model, cache, &contact)?);
+    }
     if let Some(label) = label {
         report.object = label;
     }
     if json { say(&serde_json::to_string_pretty(&report)?) } else { say_raw(&report.to_text()) }
+}
+
+/// The probe presses of `model` against the material, the same-mesh FEM beside it.
+fn against_material(
+    material: &crate::mechanics::material::Material,
+    grid: crate::mechanics::grid::Grid,
+    model: (Model, Option<crate::mechanics::msm::MsmParams>),
+    cache: Option<PathBuf>,
+    contact: &str,
+) -> anyhow::Result<crate::validate::probe_score::MaterialReport> {
+    use crate::validate::{continuum, continuum_cache, probe_score};
+    let dir = cache.or_else(crate::io::cache_dir);
+    let mut kept = continuum_cache::ContinuumCache::open(material, dir.as_deref());
+    let (mut responder, _) = touch_score::responder(model.0, model.1, material, grid)?;
+    let fem = Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear);
+    let (mut own, _) = touch_score::responder(fem, None, material, grid)?;
+    let start = std::time::Instant::now();
+    let mut model_force: Box<dyn FnMut(&continuum::Press) -> anyhow::Result<f64>> = if contact == "surface" {
+        let compliance = crate::sim::surface_probe::load_or_compute(material, dir.as_deref(), &mut |f| {
+            eprintln!("the material's surface compliance: {:.0} %, {:.0} s", 100.0 * f, start.elapsed().as_secs_f64());
+        })?;
+        let mut scratch = crate::response::surface_compliance::ContactScratch::default();
+        Box::new(move |press| {
+            let f = compliance.press(press.centre(), press.radius, &mut scratch)?;
+            Ok(-glam::DVec3::from(f).dot(glam::DVec3::from(press.direction())))
+        })
+    } else {
+        Box::new(move |press| probe_score::responder_force_n(&mut responder, press))
+    };
+    probe_score::evaluate(
+        material,
+        contact,
+        &mut *model_force,
+        &mut own,
+        &mut kept,
+        continuum::DEFAULT_TOLERANCE,
+        &mut |i, n, case, spacing| {
+            eprintln!(
+                "the material's force, press {}/{n} ({}): {:.2} mm spacing, {:.0} s",
+                i + 1,
+                case.id,
+                spacing * 1e3,
+                start.elapsed().as_secs_f64()
+            );
+        },
+    )
+    .with_context(|| {
+        format!(
+            "the probe against the material (answers kept in {})",
+            dir.as_deref().map_or("no cache folder".into(), |d| d.display().to_string())
+        )
+    })
 }

@@ -9,5 +9,11 @@ pub mod write;
 
 pub use message::{brief_line, num};
 pub use pending::remove_pending;
-pub use read::{MAX_INPUT_BYTES, read_json, read_text};
+pub use read::{MAX_INPUT_BYTES, read_bytes, read_json, read_text};
 pub use write::{MAX_OUTPUT_BYTES, OutputDir, check_output, write_atomic, write_json_atomic, write_json_compact};
+
+/// The default cache folder: `$XDG_CACHE_HOME/tissue-sim`, else `$HOME/.cache/tissue-sim`.
+pub fn cache_dir() -> Option<std::path::PathBuf> {
+    let from = |v: &str| std::env::var_os(v).filter(|s| !s.is_empty()).map(std::path::PathBuf::from);
+    from("XDG_CACHE_HOME").or_else(|| from("HOME").map(|h| h.join(".cache"))).map(|d| d.join("tissue-sim"))
+}

@@ -30,6 +30,22 @@ pub fn read_text(path: &Path) -> anyhow::Result<String> {
     Ok(text)
 }
 
+/// Reads a binary file of at most `max` bytes (a cache file the program wrote).
+pub fn read_bytes(path: &Path, max: u64) -> anyhow::Result<Vec<u8>> {
+    use anyhow::{Context as _, bail};
+    use std::io::Read as _;
+    let f = std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+    if f.metadata().is_ok_and(|m| m.is_dir()) {
+        bail!("cannot read {}: it is a directory", path.display());
+    }
+    let mut bytes = Vec::new();
+    f.take(max + 1).read_to_end(&mut bytes).with_context(|| format!("cannot read {}", path.display()))?;
+    if bytes.len() as u64 > max {
+        bail!("{} is larger than the bound of {} MB", path.display(), max >> 20);
+    }
+    Ok(bytes)
+}
+
 #[cfg(all(test, unix))]
 mod tests {
     use super::*;

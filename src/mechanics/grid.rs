@@ -146,6 +146,11 @@ impl Grid {
         [node % self.n, (node / self.n) % self.n, node / (self.n * self.n)]
     }
 
+    /// Whether a node lies on the cube's boundary.
+    pub fn on_boundary(&self, node: usize) -> bool {
+        self.ijk(node).iter().any(|&c| c == 0 || c + 1 == self.n)
+    }
+
     /// Rest position of a node, metres.
     #[inline]
     pub fn position(&self, node: usize) -> [f64; 3] {

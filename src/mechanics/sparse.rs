@@ -265,6 +265,34 @@ impl SpdSystem {
     }
 }
 
+impl SpdSystem {
+    /// Solves `A X = B` in place for `cols` right-hand sides stored column after column in `rhs`
+    /// (`n * cols` values). Allocates its own scratch: for reference computations, not for a step.
+    pub fn solve_columns_in_place(&mut self, rhs: &mut [f64], cols: usize) -> Result<(), SparseError> {
+        if !self.factored {
+            return Err(SparseError::NotFactored);
+        }
+        if rhs.len() != self.n * cols {
+            return Err(SparseError::Pattern(format!("{} values for {cols} columns of {}", rhs.len(), self.n)));
+        }
+        let req = self.symbolic.solve_in_place_scratch::<f64>(cols, Par::Seq);
+        let mut scratch = MemBuffer::try_new(req).map_err(|_| SparseError::Pattern("out of memory".into()))?;
+        let llt = LltRef::new(&self.symbolic, &self.l_values);
+        llt.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(rhs, self.n, cols),
+            Par::Seq,
+            MemStack::new(&mut scratch),
+        );
+        Ok(())
+    }
+
+    /// Nonzeros of the Cholesky factor.
+    pub fn factor_nonzeros(&self) -> usize {
+        self.l_values.len()
+    }
+}
+
 /// The largest grid each direct solve accepts, nodes per axis, at the memory its factor needs
 /// (the sparse factor bound, [`MAX_FACTOR_BYTES`]); checked before any work
 /// ([`DirectSolve::check_grid`]): the FEM patch cases and the touch benchmark (full, unreduced

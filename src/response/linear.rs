@@ -203,13 +203,14 @@ impl SceneSolver {
     }
 
     /// The sphere (`centre`, `radius`, metres) held still against the tissue at rest: every free
-    /// node inside it is moved onto its surface along the outward normal at rest (linearised node
+    /// surface node inside it is moved onto its surface along the outward normal at rest (linearised node
     /// contact, frictionless: the contact force is normal), with an active set so that no contact
     /// pulls and no free node ends inside.
     pub fn probe(&mut self, grid: &Grid, centre: [f64; 3], radius: f64) -> Result<ProbeAnswer, SparseError> {
         let nn = grid.num_nodes();
         let geometry = sphere_geometry(grid, centre, radius);
-        let free_nodes: Vec<bool> = (0..nn).map(|p| !self.fixed[3 * p]).collect();
+        // Contact is with the surface: interior nodes never touch the sphere.
+        let free_nodes: Vec<bool> = (0..nn).map(|p| !self.fixed[3 * p] && grid.on_boundary(p)).collect();
         let zero = vec![0.0; 3 * nn];
         let ContactSolve { u, solved, lambda, columns, chol } =
             contact_active_set(&mut |w| self.solve(w), &zero, &geometry, &free_nodes, radius)?;

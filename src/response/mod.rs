@@ -16,3 +16,4 @@ pub mod linear;
 pub mod modal;
 pub mod modes;
 pub mod single_mode;
+pub mod surface_compliance;

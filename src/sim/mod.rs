@@ -17,6 +17,7 @@ pub mod model;
 pub mod msm_tissue;
 pub mod shipped;
 pub mod simulation;
+pub mod surface_probe;
 pub mod tissue;
 pub mod tool;
 

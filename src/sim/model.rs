@@ -64,12 +64,23 @@ impl Model {
     /// fundamental ([`crate::response::damping`]), except the paper's axis lattice, which keeps
     /// its nodal `d`.
     pub fn build(self, material: &Material, params: Option<MsmParams>, zeta: f64) -> anyhow::Result<Box<dyn Tissue>> {
-        let grid = crate::mechanics::grid::Grid::paper();
+        self.build_on(crate::mechanics::grid::Grid::paper(), material, params, zeta)
+    }
+
+    /// [`Model::build`] on `grid`: a lattice without `params` takes its shipped tissue carried
+    /// to the grid ([`crate::sim::shipped::msm_params_at`]).
+    pub fn build_on(
+        self,
+        grid: crate::mechanics::grid::Grid,
+        material: &Material,
+        params: Option<MsmParams>,
+        zeta: f64,
+    ) -> anyhow::Result<Box<dyn Tissue>> {
         let mut tissue: Box<dyn Tissue> = match self {
             Model::Lattice(t) => {
                 let p = match params {
                     Some(p) => p,
-                    None => crate::sim::shipped::tissue_params(material, t)?,
+                    None => crate::sim::shipped::msm_params_at(material, t, &grid)?,
                 };
                 Box::new(MsmTissue::new(MsmModel::new(grid, p, material.density)?, material.density))
             }

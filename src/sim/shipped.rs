@@ -9,6 +9,7 @@
 
 use anyhow::Context as _;
 
+use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmParams, Topology};
 
@@ -100,4 +101,26 @@ pub fn shipped(material: &Material, topology: Topology) -> anyhow::Result<Shippe
         (other, _) => anyhow::bail!("no calibrated tissue is shipped for object {other:?}; calibrate one"),
     };
     serde_json::from_str(text).context("assets: invalid tissue file")
+}
+
+/// The shipped 8^3 parameters carried to `grid` by their stiffness scale: `k ~ E L^2 / (n^2 h)`
+/// per chain for the axis and shear lattices, `k ~ E h` per element for the hex lattice; the
+/// nodal damping `d` with the node mass.
+pub fn msm_params_at(material: &Material, topology: Topology, grid: &Grid) -> anyhow::Result<MsmParams> {
+    let p = tissue_params(material, topology)?;
+    let paper = Grid::paper();
+    let chain = |g: &Grid| CUBE_SIDE_M * CUBE_SIDE_M / ((g.n() * g.n()) as f64 * g.h());
+    let s = if topology == Topology::Hex { grid.h() / paper.h() } else { chain(grid) / chain(&paper) };
+    let mass = (paper.num_nodes() as f64) / grid.num_nodes() as f64;
+    let sc = |v: Option<f64>| v.map(|v| v * s);
+    Ok(MsmParams {
+        k1: p.k1 * s,
+        k2: p.k2 * s,
+        k3: p.k3 * s,
+        d: p.d * mass,
+        c12: sc(p.c12),
+        c13: sc(p.c13),
+        c23: sc(p.c23),
+        b: sc(p.b),
+    })
 }

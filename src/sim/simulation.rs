@@ -61,6 +61,12 @@ pub struct Simulation {
     good_time: Option<f64>,
     steps_since_good: usize,
     rest: [Vec<f64>; 3],
+    /// Nodes on the cube's surface: the only ones the probe touches.
+    surface: Vec<bool>,
+    /// The probe on the material's surface compliance, when set.
+    surface_probe: Option<super::surface_probe::SurfaceProbe>,
+    /// Whether this step's probe force came from the surface compliance.
+    probe_on_surface: bool,
     contact_forces: [Vec<f64>; 3],
     /// Blow-ups since the last healthy step past the previous blow-up's time.
     recoveries: u32,
@@ -100,6 +106,9 @@ impl Simulation {
             good_time: None,
             steps_since_good: 0,
             rest,
+            surface: (0..nn).map(|p| grid.on_boundary(p)).collect(),
+            surface_probe: None,
+            probe_on_surface: false,
             contact_forces: zeros(),
             recoveries: 0,
             last_blow_up_s: f64::NEG_INFINITY,
@@ -338,10 +347,22 @@ impl Simulation {
         None
     }
 
+    /// Sets the probe's contact: on the material's surface compliance (`Some`), or the running
+    /// model's surface nodes (`None`).
+    pub fn set_surface_probe(&mut self, probe: Option<super::surface_probe::SurfaceProbe>) {
+        self.surface_probe = probe;
+    }
+
+    /// Whether the probe pushes back through the material's surface compliance.
+    pub fn has_surface_probe(&self) -> bool {
+        self.surface_probe.is_some()
+    }
+
     fn apply_tool_load(&mut self) {
         if self.tool == Tool::None {
             self.tool_force = [0.0; 3];
         }
+        self.probe_on_surface = false;
         let drag = match self.tool {
             Tool::Drag { node, target } => {
                 let (x, v) = (self.tissue.x(), self.tissue.v());
@@ -361,6 +382,18 @@ impl Simulation {
             }
             self.tool_force = f.map(|v| -v);
         }
+        if let (Tool::Probe { centre, radius }, Some(probe)) = (self.tool, self.surface_probe.as_mut())
+            && super::surface_probe::SurfaceProbe::covers(centre, radius)
+            && let Ok(force) = probe.update(centre, radius)
+        {
+            for &(node, f) in probe.loads() {
+                for c in 0..3 {
+                    f_ext[c][node] += f[c];
+                }
+            }
+            self.tool_force = force;
+            self.probe_on_surface = true;
+        }
     }
 
     /// Projects nodes out of the probe sphere, removes their inward velocity, and sums the
@@ -369,6 +402,9 @@ impl Simulation {
         let Tool::Probe { centre, radius } = self.tool else {
             return;
         };
+        if self.probe_on_surface {
+            return;
+        }
         let mut push = [0.0; 3];
         let nn = self.rest[0].len();
         // The force on every node before any is projected.
@@ -377,7 +413,7 @@ impl Simulation {
             self.contact_forces[c].copy_from_slice(&computed[c]);
         }
         for p in 0..nn {
-            if self.tissue.free()[p] == 0.0 {
+            if self.tissue.free()[p] == 0.0 || !self.surface[p] {
                 continue;
             }
             let x = self.tissue.x();

@@ -17,7 +17,7 @@
 
 use std::time::Instant;
 
-pub use super::chart_measure::{ERROR_UNIT_M, msm_params_at, sample};
+pub use super::chart_measure::{ERROR_UNIT_M, sample};
 use super::chart_measure::{MAX_COUPLED_IMPLICIT_N, cases, errors, model_points, sampled};
 pub use super::chart_point::{CHART_DAMPING_RATIO, CHARTED, ChartPoint, IMPLICIT_STEPS_S, integrator_chart_name};
 pub use super::pareto::{crossing, mark_pareto};
@@ -26,6 +26,7 @@ use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 pub use crate::response::single_mode::damped_explicit_limit;
 use crate::sim::Model;
+pub use crate::sim::shipped::msm_params_at;
 
 /// Nodes per axis of the reference FEM.
 pub const REFERENCE_N: usize = 40;

@@ -14,7 +14,7 @@ use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{Dynamics, MsmModel, MsmParams, Topology, statics};
 use crate::response::single_mode::damped_explicit_limit;
-use crate::sim::shipped::tissue_params;
+use crate::sim::shipped::msm_params_at;
 use crate::sim::{Integrator, Model};
 use crate::study::timing::{time_fallible, time_per_call};
 
@@ -164,26 +164,6 @@ pub(super) fn errors(model: &[Vec<[f64; 3]>], reference: &[Vec<[f64; 3]>]) -> (f
     let avg = d.iter().sum::<f64>() / d.len() as f64;
     let max = d.iter().copied().fold(0.0, f64::max);
     (100.0 * avg / ERROR_UNIT_M, 100.0 * max / ERROR_UNIT_M)
-}
-
-/// The shipped 8^3 parameters carried to `grid` (see the module docs).
-pub fn msm_params_at(material: &Material, topology: Topology, grid: &Grid) -> anyhow::Result<MsmParams> {
-    let p = tissue_params(material, topology)?;
-    let paper = Grid::paper();
-    let chain = |g: &Grid| CUBE_SIDE_M * CUBE_SIDE_M / ((g.n() * g.n()) as f64 * g.h());
-    let s = if topology == Topology::Hex { grid.h() / paper.h() } else { chain(grid) / chain(&paper) };
-    let mass = (paper.num_nodes() as f64) / grid.num_nodes() as f64;
-    let sc = |v: Option<f64>| v.map(|v| v * s);
-    Ok(MsmParams {
-        k1: p.k1 * s,
-        k2: p.k2 * s,
-        k3: p.k3 * s,
-        d: p.d * mass,
-        c12: sc(p.c12),
-        c13: sc(p.c13),
-        c23: sc(p.c23),
-        b: sc(p.b),
-    })
 }
 
 /// Bytes of a mass-spring state and model: positions, velocities, forces (4 x 3 arrays), the

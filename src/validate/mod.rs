@@ -12,7 +12,11 @@
 //! May use: [`crate::sim`], [`crate::response`], [`crate::mechanics`], [`crate::io`].
 
 pub mod accuracy;
+pub mod continuum;
+pub mod continuum_cache;
 pub mod dynamic_measure;
 pub mod dynamic_reference;
+pub mod presses;
+pub mod probe_score;
 pub mod touch;
 pub mod touch_score;

@@ -48,6 +48,12 @@ impl Responder {
         self.solver.factor(&self.stiffness, theta)
     }
 
+    /// The force of the tissue on a sphere (`centre`, `radius`, metres) held against it at rest,
+    /// newtons: the node contact of [`SceneSolver::probe`].
+    pub fn press(&mut self, centre: [f64; 3], radius: f64) -> Result<[f64; 3], crate::mechanics::sparse::SparseError> {
+        Ok(self.solver.probe(&self.grid, centre, radius)?.force)
+    }
+
     /// The answer to `case`, and for a probe case the adjoint field of its force
     /// ([`crate::response::linear::ProbeAnswer::sensitivity`]).
     pub fn answer(
@@ -203,6 +209,9 @@ pub struct Report {
     pub median_force_error: f64,
     /// Largest `|1 - f_model / f_fem|` over the six modes (fraction).
     pub worst_frequency_error: f64,
+    /// The probe force against the material (absent when not asked for).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<crate::validate::probe_score::MaterialReport>,
 }
 
 /// Scores `model` of `material` (a lattice with `params`, its shipped tissue when `None`)
@@ -242,6 +251,7 @@ pub fn evaluate(
         cases,
         modes_hz,
         fem_modes_hz: reference.modes_hz.clone(),
+        material: None,
     })
 }
 
@@ -298,6 +308,10 @@ impl Report {
             100.0 * self.median_force_error,
             100.0 * self.worst_frequency_error
         );
+        if let Some(m) = &self.material {
+            s += "\n";
+            s += &m.to_text();
+        }
         s
     }
 }

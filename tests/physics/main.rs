@@ -5,5 +5,6 @@ mod calibration;
 mod dynamics;
 mod fem_reference;
 mod msm_statics;
+mod probe_material;
 mod stability;
 mod touch;

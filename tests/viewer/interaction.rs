@@ -11,6 +11,9 @@ fn script(actions: Vec<Action>) -> Script {
         integrator: None,
         damping_ratio: None,
         clamp: "bottom".into(),
+        nodes: 8,
+        // The model's own node contact: these tests check that no node ends inside the sphere.
+        contact: tissue_sim::study::script::Contact::Nodes,
         actions,
     }
 }

@@ -30,6 +30,9 @@ pub fn show(
     let f = ctx.published.tool_force;
     let norm = DVec3::from(f).length();
     ui.label(format!("force on tool: |F| = {norm:.4} N  ({:.4}, {:.4}, {:.4})", f[0], f[1], f[2]));
+    if settings.tool == ToolKind::Probe {
+        ui.label(contact_line(shown, ctx));
+    }
     if let Tool::Drag { .. } = shown.tool {
         ui.label(format!(
             "red arrow: the force on the tissue, {:.0} mm per newton",
@@ -94,5 +97,17 @@ pub fn show(
             100.0 * avg / h,
             100.0 * max / h
         ));
+    }
+}
+
+/// What the probe touches: the material's surface compliance, or the model's nodes until it is
+/// ready.
+fn contact_line(shown: &Shown, ctx: &PanelContext<'_>) -> String {
+    match (&shown.contact_status, ctx.published.surface_probe) {
+        (Some(status), _) => status.clone(),
+        (None, true) => "probe contact: the material's surface compliance (top face, 2.5 mm grid; within 7 % of the \
+                         material on the validation presses)"
+            .into(),
+        (None, false) => "probe contact: the model's surface nodes".into(),
     }
 }

@@ -3,13 +3,81 @@
 
 use std::sync::Arc;
 
+use super::super::physics::Command;
+use crate::response::surface_compliance::SurfaceCompliance;
+
 use super::super::calibration_job;
 use super::{ProbeComparison, ViewerState};
 use crate::calibrate::Settings;
 use crate::mechanics::msm::MsmParams;
 use crate::sim::Model;
 
+/// Messages of the surface compliance job.
+#[derive(Debug)]
+pub(super) enum ComplianceMessage {
+    /// The fraction done.
+    Progress(f64),
+    /// Ready (or failed).
+    Done(Result<Arc<SurfaceCompliance>, String>),
+}
+
 impl ViewerState {
+    /// Loads (or computes, about 25 s, and keeps) the material's surface compliance in the
+    /// background; the probe uses the model's surface nodes until it is ready.
+    pub(super) fn start_compliance(&mut self) {
+        if self.compliance.busy() {
+            self.compliance_stale = true;
+            return;
+        }
+        let material = self.shown.material.clone();
+        let wake = Arc::clone(&self.wake);
+        self.shown.contact_status = Some("probe contact: the material's surface compliance is loading".into());
+        let started = self.compliance.start(
+            "surface compliance",
+            move || wake(),
+            move |ctx| {
+                let dir = crate::io::cache_dir();
+                let r = crate::sim::surface_probe::load_or_compute(&material, dir.as_deref(), &mut |f| {
+                    ctx.send(ComplianceMessage::Progress(f));
+                });
+                ctx.send(ComplianceMessage::Done(r.map_err(|e| format!("{e:#}"))));
+            },
+        );
+        if let Err(e) = started {
+            self.shown.contact_status = Some(format!("probe contact: the model's nodes ({e})"));
+        }
+    }
+
+    /// Takes the surface compliance job's messages; a ready compliance goes to the physics.
+    pub(super) fn poll_compliance(&mut self, send: &mut dyn FnMut(Command)) {
+        let shown = &mut self.shown;
+        let stale = self.compliance_stale;
+        let ended = self.compliance.poll(|m| match m {
+            // Another material's: dropped.
+            _ if stale => {}
+            ComplianceMessage::Progress(f) => {
+                shown.contact_status = Some(format!(
+                    "probe contact: computing the material's surface compliance, {:.0} % (the model's nodes until then)",
+                    100.0 * f
+                ));
+            }
+            ComplianceMessage::Done(Ok(c)) => {
+                shown.contact_status = None;
+                send(Command::SetSurfaceProbe(Some(c)));
+            }
+            ComplianceMessage::Done(Err(e)) => {
+                shown.contact_status = Some(format!("probe contact: the model's nodes (surface compliance failed: {e})"));
+            }
+        });
+        if let Some(super::super::worker::State::Stopped(why)) = &ended {
+            self.shown.contact_status = Some(format!("probe contact: the model's nodes (the job stopped: {why})"));
+        }
+        if ended.is_some() && stale {
+            self.compliance_stale = false;
+            self.start_compliance();
+        }
+    }
+
     /// Scores the running model on the touch benchmark in the background (again when it ends,
     /// if the model changes meanwhile).
     pub(super) fn start_validation(&mut self) {

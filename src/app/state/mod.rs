@@ -74,6 +74,10 @@ pub struct ViewerState {
     /// The model changed while a validation ran: score it again when that one ends.
     validation_stale: bool,
     fem_probe: Slot<Result<ProbeComparison, String>>,
+    compliance: Slot<jobs::ComplianceMessage>,
+    /// The material changed while a surface compliance was computed: its result is dropped and
+    /// the new material's started when it ends.
+    compliance_stale: bool,
     wake: Arc<dyn Fn() + Send + Sync>,
 }
 
@@ -101,6 +105,7 @@ impl ViewerState {
         let state = Self {
             settings: ViewSettings::default(),
             shown: Shown {
+                contact_status: None,
                 material,
                 params,
                 integrator: None,
@@ -126,10 +131,13 @@ impl ViewerState {
             validation: Slot::default(),
             validation_stale: false,
             fem_probe: Slot::default(),
+            compliance: Slot::default(),
+            compliance_stale: false,
             wake: Arc::new(wake),
         };
         let mut state = state;
         state.start_validation();
+        state.start_compliance();
         let first = state.replacement();
         Ok((state, first))
     }
@@ -258,7 +266,9 @@ impl ViewerState {
         self.shown.fem_answer = None;
         self.shown.fem_probe = None;
         self.start_validation();
+        send(Command::SetSurfaceProbe(None));
         send(Command::Replace(self.replacement()));
+        self.start_compliance();
     }
 
     fn apply_case(&mut self, send: &mut dyn FnMut(Command)) {
@@ -291,8 +301,10 @@ impl ViewerState {
         send(Command::ApplyCase(case));
     }
 
-    /// Takes what the background jobs have sent.
-    pub fn poll(&mut self) {
+    /// Takes what the background jobs have sent, sending what the physics thread must do
+    /// through `send`.
+    pub fn poll(&mut self, send: &mut dyn FnMut(Command)) {
+        self.poll_compliance(send);
         let shown = &mut self.shown;
         let ended = self.calibration.poll(|msg| match msg {
             Progress::Generation(s) => shown.history.push(s),
@@ -340,7 +352,11 @@ impl ViewerState {
 
     /// Whether a background job runs (the UI then redraws as its messages arrive).
     pub fn busy(&self) -> bool {
-        self.fem.busy() || self.calibration.busy() || self.validation.busy() || self.fem_probe.busy()
+        self.fem.busy()
+            || self.calibration.busy()
+            || self.validation.busy()
+            || self.fem_probe.busy()
+            || self.compliance.busy()
     }
 }
 
@@ -414,7 +430,7 @@ mod tests {
         assert!(state.shown.note.as_deref().is_some_and(|n| n.contains("already running")), "{:?}", state.shown.note);
         state.handle(Request::CancelCalibration, &mut send);
         for _ in 0..5000 {
-            state.poll();
+            state.poll(&mut send);
             if !state.shown.calibrating {
                 break;
             }

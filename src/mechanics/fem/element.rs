@@ -20,14 +20,19 @@ pub const NODE_SIGNS: [[f64; 3]; 8] = [
 /// Strain-displacement matrix `B` (Voigt order 11, 22, 33, 23, 13, 12, engineering shear) at
 /// natural point `xi` of a cube of side `h`.
 pub fn strain_displacement(xi: [f64; 3], h: f64) -> SMatrix<f64, 6, 24> {
+    box_strain_displacement(xi, [h; 3])
+}
+
+/// [`strain_displacement`] of an axis-aligned box of sides `sides` (x, y, z).
+pub fn box_strain_displacement(xi: [f64; 3], sides: [f64; 3]) -> SMatrix<f64, 6, 24> {
     let mut b = SMatrix::<f64, 6, 24>::zeros();
     // x = x0 + h/2 (xi + 1): d/dx = (2/h) d/dxi.
-    let scale = 2.0 / h;
+    let scale = sides.map(|h| 2.0 / h);
     for (a, s) in NODE_SIGNS.iter().enumerate() {
         let f = |d: usize| 1.0 + s[d] * xi[d];
-        let dx = scale * 0.125 * s[0] * f(1) * f(2);
-        let dy = scale * 0.125 * s[1] * f(0) * f(2);
-        let dz = scale * 0.125 * s[2] * f(0) * f(1);
+        let dx = scale[0] * 0.125 * s[0] * f(1) * f(2);
+        let dy = scale[1] * 0.125 * s[1] * f(0) * f(2);
+        let dz = scale[2] * 0.125 * s[2] * f(0) * f(1);
         let (cx, cy, cz) = (3 * a, 3 * a + 1, 3 * a + 2);
         b[(0, cx)] = dx;
         b[(1, cy)] = dy;
@@ -45,13 +50,19 @@ pub fn strain_displacement(xi: [f64; 3], h: f64) -> SMatrix<f64, 6, 24> {
 /// Element stiffness `K_e = sum_g B^T C B det(J) w_g` of a cube of side `h` with material
 /// stiffness `c`, 2x2x2 Gauss points at `+-1/sqrt(3)` (exact for this element shape).
 pub fn hex8_stiffness(c: &Matrix6<f64>, h: f64) -> ElementStiffness {
+    hex8_box_stiffness(c, [h; 3])
+}
+
+/// [`hex8_stiffness`] of an axis-aligned box of sides `sides` (x, y, z), metres: the same rule,
+/// exact for this shape too.
+pub fn hex8_box_stiffness(c: &Matrix6<f64>, sides: [f64; 3]) -> ElementStiffness {
     let g = 1.0 / 3f64.sqrt();
-    let det_j = (0.5 * h).powi(3);
+    let det_j = 0.125 * sides[0] * sides[1] * sides[2];
     let mut ke = ElementStiffness::zeros();
     for &sx in &[-g, g] {
         for &sy in &[-g, g] {
             for &sz in &[-g, g] {
-                let b = strain_displacement([sx, sy, sz], h);
+                let b = box_strain_displacement([sx, sy, sz], sides);
                 ke += b.transpose() * (c * b) * det_j;
             }
         }
@@ -90,21 +101,23 @@ mod tests {
 
     #[test]
     fn uniform_strain_energy_is_exact() {
-        // For u = eps . x, the element energy is V/2 eps^T C eps exactly.
+        // For u = eps . x, the element energy is V/2 eps^T C eps exactly, on a cube and a box.
         let m = Material::object_b();
-        let h = 0.02;
-        let ke = hex8_stiffness(&m.stiffness, h);
-        let eps = nalgebra::Vector6::new(1e-3, -2e-4, 5e-4, 3e-4, -1e-4, 2e-4);
-        let mut u = SMatrix::<f64, 24, 1>::zeros();
-        for (a, s) in NODE_SIGNS.iter().enumerate() {
-            let p = s.map(|v| 0.5 * h * (v + 1.0));
-            // Displacement gradient with symmetric shear (gamma = 2 eps_ij).
-            u[3 * a] = eps[0] * p[0] + 0.5 * eps[5] * p[1] + 0.5 * eps[4] * p[2];
-            u[3 * a + 1] = 0.5 * eps[5] * p[0] + eps[1] * p[1] + 0.5 * eps[3] * p[2];
-            u[3 * a + 2] = 0.5 * eps[4] * p[0] + 0.5 * eps[3] * p[1] + eps[2] * p[2];
+        for sides in [[0.02; 3], [0.02, 0.005, 0.013]] {
+            let ke = hex8_box_stiffness(&m.stiffness, sides);
+            let eps = nalgebra::Vector6::new(1e-3, -2e-4, 5e-4, 3e-4, -1e-4, 2e-4);
+            let mut u = SMatrix::<f64, 24, 1>::zeros();
+            for (a, s) in NODE_SIGNS.iter().enumerate() {
+                let p = [0, 1, 2].map(|d| 0.5 * sides[d] * (s[d] + 1.0));
+                // Displacement gradient with symmetric shear (gamma = 2 eps_ij).
+                u[3 * a] = eps[0] * p[0] + 0.5 * eps[5] * p[1] + 0.5 * eps[4] * p[2];
+                u[3 * a + 1] = 0.5 * eps[5] * p[0] + eps[1] * p[1] + 0.5 * eps[3] * p[2];
+                u[3 * a + 2] = 0.5 * eps[4] * p[0] + 0.5 * eps[3] * p[1] + eps[2] * p[2];
+            }
+            let e_fem = 0.5 * (u.transpose() * ke * u)[(0, 0)];
+            let volume = sides[0] * sides[1] * sides[2];
+            let e_exact = 0.5 * volume * (eps.transpose() * m.stiffness * eps)[(0, 0)];
+            assert!((e_fem - e_exact).abs() < 1e-12 * e_exact, "{e_fem} vs {e_exact}");
         }
-        let e_fem = 0.5 * (u.transpose() * ke * u)[(0, 0)];
-        let e_exact = 0.5 * h.powi(3) * (eps.transpose() * m.stiffness * eps)[(0, 0)];
-        assert!((e_fem - e_exact).abs() < 1e-12 * e_exact, "{e_fem} vs {e_exact}");
     }
 }

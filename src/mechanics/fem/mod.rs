@@ -9,6 +9,7 @@
 pub mod clamped;
 pub mod dynamics;
 pub mod element;
+pub mod graded;
 
 use crate::mechanics::cases::{CaseSolution, LoadCase};
 use crate::mechanics::grid::Grid;

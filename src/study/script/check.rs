@@ -3,7 +3,10 @@
 
 use glam::DVec3;
 
-use super::{Action, MAX_ACTION_S, MAX_ACTIONS, MAX_RECORDED, MAX_SAMPLES, MAX_TOTAL_STEPS, Script, steps_for};
+use super::{
+    Action, MAX_ACTION_S, MAX_ACTIONS, MAX_RECORDED, MAX_SAMPLES, MAX_SCRIPT_NODES, MAX_TOTAL_STEPS, PathKey, Script,
+    steps_for,
+};
 use crate::mechanics::grid::Grid;
 
 fn check(name: &str, v: f64, positive: bool) -> anyhow::Result<()> {
@@ -42,6 +45,10 @@ pub const MAX_SAMPLES_PER_PROBE: usize = 10_000;
 /// bounds on actions and recorded events, and each action's node, points, sizes and samples.
 pub(super) fn check_script(script: &Script) -> anyhow::Result<()> {
     crate::sim::check_dt(script.dt).map_err(|e| anyhow::anyhow!("script: dt = {e}"))?;
+    if !(4..=MAX_SCRIPT_NODES).contains(&script.nodes) {
+        anyhow::bail!("script: nodes = {} is out of range (4 to {MAX_SCRIPT_NODES} nodes per axis)", script.nodes);
+    }
+    let grid = Grid::new(script.nodes)?;
     if let Some(i) = script.integrator {
         script.model.check_integrator(i).map_err(|e| anyhow::anyhow!("script: {e}"))?;
     }
@@ -55,9 +62,14 @@ pub(super) fn check_script(script: &Script) -> anyhow::Result<()> {
     }
     let mut total_samples = 0usize;
     for (i, a) in script.actions.iter().enumerate() {
-        check_action(a).map_err(|e| anyhow::anyhow!("script: action {i}: {e}"))?;
-        if let Action::Probe { samples, .. } = a {
-            total_samples += samples;
+        check_action(a, &grid).map_err(|e| anyhow::anyhow!("script: action {i}: {e}"))?;
+        match a {
+            Action::Probe { samples, .. } => total_samples += samples,
+            Action::ProbePath { sample_hz, .. } => {
+                // At most one sample per step and per sample time.
+                total_samples += (a.duration_s() * sample_hz).floor() as usize + 1;
+            }
+            _ => {}
         }
     }
     if total_samples > MAX_SAMPLES {
@@ -66,43 +78,90 @@ pub(super) fn check_script(script: &Script) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// One action's node, points, sizes, duration and samples.
-fn check_action(action: &Action) -> anyhow::Result<()> {
+/// A probe's radius and depth.
+fn check_sizes(radius: f64, depth: f64) -> anyhow::Result<()> {
     let l = crate::mechanics::grid::CUBE_SIDE_M;
-    check("duration_s", action.duration_s(), false)?;
-    if action.duration_s() > MAX_ACTION_S {
-        anyhow::bail!("duration_s = {} s is too long (at most {MAX_ACTION_S} s)", crate::io::num(action.duration_s()));
+    check("radius", radius, true)?;
+    check("depth", depth, false)?;
+    if radius > l || depth > l {
+        anyhow::bail!(
+            "probe radius {} m and depth {} m must each be at most the cube's side ({l} m); sizes are metres",
+            crate::io::num(radius),
+            crate::io::num(depth)
+        );
     }
+    Ok(())
+}
+
+/// A probe's direction.
+fn check_direction(direction: &[f64; 3]) -> anyhow::Result<()> {
+    let len = DVec3::from(*direction).length();
+    if !(len.is_finite() && len > 0.0) {
+        anyhow::bail!("probe needs a finite, non-zero direction");
+    }
+    Ok(())
+}
+
+/// Largest sample rate of a probe path, Hz.
+pub const MAX_SAMPLE_HZ: f64 = 1e6;
+/// Keys of one probe path.
+pub const MAX_PATH_KEYS: usize = 10_000;
+
+/// A probe path's keys and sample rate.
+fn check_path(radius: f64, keys: &[PathKey], sample_hz: f64) -> anyhow::Result<()> {
+    if keys.is_empty() || keys.len() > MAX_PATH_KEYS {
+        anyhow::bail!("a probe path needs 1 to {MAX_PATH_KEYS} keys, got {}", keys.len());
+    }
+    let mut last = f64::NEG_INFINITY;
+    for (k, key) in keys.iter().enumerate() {
+        check(&format!("keys[{k}].t"), key.t, false)?;
+        if key.t <= last {
+            anyhow::bail!("keys[{k}].t = {} s does not increase (the key before is at {} s)", key.t, last);
+        }
+        last = key.t;
+        check_point(&format!("keys[{k}].at"), &key.at)?;
+        check_sizes(radius, key.depth).map_err(|e| anyhow::anyhow!("keys[{k}]: {e}"))?;
+    }
+    if !(sample_hz.is_finite() && sample_hz > 0.0 && sample_hz <= MAX_SAMPLE_HZ) {
+        anyhow::bail!(
+            "sample_hz = {} is out of range (above 0, at most {MAX_SAMPLE_HZ} Hz)",
+            crate::io::num(sample_hz)
+        );
+    }
+    Ok(())
+}
+
+/// One action's node, points, sizes, duration and samples.
+fn check_action(action: &Action, grid: &Grid) -> anyhow::Result<()> {
     match action {
         Action::Drag { node, to, .. } => {
-            let nodes = Grid::paper().num_nodes();
+            let nodes = grid.num_nodes();
             if *node >= nodes {
-                anyhow::bail!("node {node} does not exist (0..{nodes})");
+                anyhow::bail!("node {node} does not exist (0..{nodes} on the {}^3 grid)", grid.n());
             }
             check_point("drag target \"to\"", to)
         }
         Action::Probe { at, direction, radius, depth, samples, .. } => {
-            check("radius", *radius, true)?;
-            check("depth", *depth, false)?;
-            if *radius > l || *depth > l {
-                anyhow::bail!(
-                    "probe radius {} m and depth {} m must each be at most the cube's side ({l} m); sizes are metres",
-                    crate::io::num(*radius),
-                    crate::io::num(*depth)
-                );
-            }
+            check_sizes(*radius, *depth)?;
             check_point("probe point \"at\"", at)?;
-            let len = DVec3::from(*direction).length();
-            if !(len.is_finite() && len > 0.0) {
-                anyhow::bail!("probe needs a finite, non-zero direction");
-            }
+            check_direction(direction)?;
             if !(1..=MAX_SAMPLES_PER_PROBE).contains(samples) {
                 anyhow::bail!("samples = {samples} is out of range (1 to {MAX_SAMPLES_PER_PROBE} per probe)");
             }
             Ok(())
         }
+        Action::ProbePath { radius, direction, keys, sample_hz, .. } => {
+            check_sizes(*radius, 0.0)?;
+            check_direction(direction)?;
+            check_path(*radius, keys, *sample_hz)
+        }
         Action::Release { .. } | Action::Wait { .. } => Ok(()),
+    }?;
+    check("duration_s", action.duration_s(), false)?;
+    if action.duration_s() > MAX_ACTION_S {
+        anyhow::bail!("duration_s = {} s is too long (at most {MAX_ACTION_S} s)", crate::io::num(action.duration_s()));
     }
+    Ok(())
 }
 
 /// The steps of the whole script at the step `dt` the policy chose, within [`MAX_TOTAL_STEPS`].

@@ -10,15 +10,30 @@
 //!     { "release": {} },
 //!     { "probe":   { "at": [0.05, 0.05, 0.1], "direction": [0, 0, -1], "radius": 0.01,
 //!                    "depth": 0.004, "duration_s": 0.2, "samples": 8 } },
+//!     { "probe_path": { "radius": 0.015, "direction": [0, 0, -1], "sample_hz": 100,
+//!                       "keys": [ { "t": 0.0, "at": [0.03, 0.05, 0.1], "depth": 0.0 },
+//!                                 { "t": 0.2, "at": [0.03, 0.05, 0.1], "depth": 0.004 },
+//!                                 { "t": 1.2, "at": [0.07, 0.05, 0.1], "depth": 0.004 } ] } },
 //!     { "wait":    { "duration_s": 0.5 } } ] }
 //! ```
+//! `contact` is `surface` (default, the viewer's: the probe's force comes from the material's
+//! surface compliance on a 2.5 mm grid of the top face, [`crate::sim::surface_probe`], computed
+//! once per material and kept in the cache folder) or `nodes` (the running model's surface nodes
+//! are projected out of the sphere). `nodes` is the grid's nodes per axis (default 8, the viewer's; 4 to [`MAX_SCRIPT_NODES`]): a
+//! lattice takes its shipped 8^3 tissue carried to that grid
+//! ([`crate::sim::shipped::msm_params_at`]), and `drag`'s node ids are on that grid.
 //! `damping_ratio` is the ratio at the fundamental (mass-proportional, see
 //! [`crate::response::damping`]; default 0.2; not for the axis lattice, which keeps the paper's
 //! nodal `d`). `clamp` is `bottom` (face z = 0 held, the viewer's default), `none`, or a case id such as
 //! `A_clamped_ax1_F10` (its fixed face and loads). A drag moves its target linearly from the
 //! node's position to `to` over `duration_s` and holds it there until `release`; a probe starts
 //! touching `at` and is pushed along `direction` to `depth` over `duration_s`, recording the
-//! force on it at `samples` evenly spaced depths, and stays until `release`.
+//! force on it at `samples` evenly spaced depths, and stays until `release`. A probe path moves
+//! the sphere through its keys (`t` from the action's start, increasing; between keys the point
+//! and depth move linearly in time; the sphere touches `at` at depth 0 and moves `depth` along
+//! `direction` as `probe` does), recording `{"action", "t", "at", "depth_m", "force_n", "force"}`
+//! into `force_path` at `sample_hz` (the first step at or after each sample time), and stays at
+//! its last key until `release`.
 //!
 //! Every action takes an optional `"record": true`: its event then carries all node positions
 //! (the last action's event always does). Bounds that no script can exceed, each named in its
@@ -60,6 +75,12 @@ pub struct Script {
     /// `bottom`, `none` or a case id (default `bottom`).
     #[serde(default = "default_clamp")]
     pub clamp: String,
+    /// Nodes per axis (default 8, the viewer's grid).
+    #[serde(default = "default_nodes")]
+    pub nodes: usize,
+    /// The probe's contact (default `surface`, the viewer's).
+    #[serde(default)]
+    pub contact: Contact,
     /// The actions, in order.
     pub actions: Vec<Action>,
 }
@@ -73,6 +94,24 @@ fn default_dt() -> f64 {
 fn default_clamp() -> String {
     "bottom".into()
 }
+fn default_nodes() -> usize {
+    Grid::paper().n()
+}
+
+/// How the probe touches the tissue.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Contact {
+    /// The material's surface compliance on a fine grid of the top face
+    /// ([`crate::sim::surface_probe`]); elsewhere, the model's surface nodes.
+    #[default]
+    Surface,
+    /// The running model's surface nodes, projected out of the sphere.
+    Nodes,
+}
+
+/// The largest grid a script runs on, nodes per axis.
+pub const MAX_SCRIPT_NODES: usize = 32;
 
 /// Total steps of a script, all actions together.
 pub const MAX_TOTAL_STEPS: u64 = 10_000_000;
@@ -111,6 +150,16 @@ pub enum Action {
         #[serde(default)]
         record: bool,
     },
+    /// Move the probe along a path of keys, sampling its force.
+    #[serde(rename = "probe_path")]
+    ProbePath {
+        radius: f64,
+        direction: [f64; 3],
+        keys: Vec<PathKey>,
+        sample_hz: f64,
+        #[serde(default)]
+        record: bool,
+    },
     /// Let go of whatever tool is held.
     Release {
         #[serde(default)]
@@ -124,12 +173,44 @@ pub enum Action {
     },
 }
 
+/// One key of a probe path.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PathKey {
+    /// Time from the action's start, s.
+    pub t: f64,
+    /// The point the sphere touches at depth 0, metres.
+    pub at: [f64; 3],
+    /// Depth along the direction, metres.
+    pub depth: f64,
+}
+
+/// The point and depth of a probe path at time `t` (held before the first key and after the
+/// last).
+fn path_at(keys: &[PathKey], t: f64) -> ([f64; 3], f64) {
+    let first = keys[0];
+    if t <= first.t {
+        return (first.at, first.depth);
+    }
+    for w in keys.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        if t <= b.t {
+            let f = (t - a.t) / (b.t - a.t);
+            let at = std::array::from_fn(|c| a.at[c] + f * (b.at[c] - a.at[c]));
+            return (at, a.depth + f * (b.depth - a.depth));
+        }
+    }
+    let last = keys[keys.len() - 1];
+    (last.at, last.depth)
+}
+
 impl Action {
     /// Whether the action asks for node positions in its event.
     pub fn record(&self) -> bool {
         match self {
             Action::Drag { record, .. }
             | Action::Probe { record, .. }
+            | Action::ProbePath { record, .. }
             | Action::Release { record }
             | Action::Wait { record, .. } => *record,
         }
@@ -140,6 +221,7 @@ impl Action {
             Action::Drag { duration_s, .. } | Action::Probe { duration_s, .. } | Action::Wait { duration_s, .. } => {
                 *duration_s
             }
+            Action::ProbePath { keys, .. } => keys.last().map_or(0.0, |k| k.t),
             Action::Release { .. } => 0.0,
         }
     }
@@ -178,6 +260,23 @@ pub struct ProbeSample {
     pub force_n: f64,
 }
 
+/// One sample of a probe path.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PathSample {
+    /// Index of the probe path action.
+    pub action: usize,
+    /// Time from the action's start, s.
+    pub t: f64,
+    /// The point the sphere touches at depth 0, metres.
+    pub at: [f64; 3],
+    /// Depth along the direction, metres.
+    pub depth_m: f64,
+    /// Force of the tissue on the probe along `-direction`, newtons.
+    pub force_n: f64,
+    /// Force of the tissue on the probe, newtons.
+    pub force: [f64; 3],
+}
+
 /// What a script produced.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Outcome {
@@ -195,12 +294,16 @@ pub struct Outcome {
     pub note: Option<String>,
     /// Nodes per axis.
     pub nodes_per_axis: usize,
+    /// The probe's contact.
+    pub contact: Contact,
     /// Steps taken.
     pub steps: u64,
     /// One event per action.
     pub events: Vec<Event>,
     /// Probe force against depth.
     pub force_depth: Vec<ProbeSample>,
+    /// Probe force along the probe paths.
+    pub force_path: Vec<PathSample>,
     /// Blow-ups detected (and recovered from).
     pub blow_ups: Vec<String>,
 }
@@ -214,7 +317,8 @@ impl Outcome {
                 anyhow::bail!("script: action {} ended in a non-finite state", e.action);
             }
         }
-        if self.force_depth.iter().any(|s| !s.force_n.is_finite()) {
+        let path = self.force_path.iter().flat_map(|s| s.force.iter().chain([&s.force_n]));
+        if self.force_depth.iter().map(|s| &s.force_n).chain(path).any(|v| !v.is_finite()) {
             anyhow::bail!("script: a probe force is not finite");
         }
         Ok(())
@@ -223,10 +327,10 @@ impl Outcome {
 
 /// Runs a script.
 pub fn run(script: &Script) -> anyhow::Result<Outcome> {
-    let grid = Grid::paper();
     let material = Material::preset(&script.object)
         .ok_or_else(|| anyhow::anyhow!("script: object must be A or B, got {:?}", script.object))?;
     check_script(script)?;
+    let grid = Grid::new(script.nodes)?;
     if script.damping_ratio.is_some() && !script.model.takes_damping_ratio() {
         anyhow::bail!(
             "script: \"damping_ratio\" is not for the axis lattice: {}",
@@ -234,7 +338,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         );
     }
     let zeta = script.damping_ratio.unwrap_or(crate::response::damping::DEFAULT_DAMPING_RATIO);
-    let tissue = script.model.build(&material, None, zeta).map_err(|e| anyhow::anyhow!("script: {e:#}"))?;
+    let tissue = script.model.build_on(grid, &material, None, zeta).map_err(|e| anyhow::anyhow!("script: {e:#}"))?;
     let case = clamp_case(&grid, &material.name, &script.clamp)?;
     let mut sim = Simulation::with_tissue(tissue, Integrator::Symplectic, script.dt, case.as_ref());
     // The viewer's step policy, with the script's drags in it: refused before the first step.
@@ -244,6 +348,13 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     })?;
     let integrator = sim.integrator;
     check_steps(script, sim.dt)?;
+    let probes = script.actions.iter().any(|a| matches!(a, Action::Probe { .. } | Action::ProbePath { .. }));
+    if script.contact == Contact::Surface && probes {
+        let compliance =
+            crate::sim::surface_probe::load_or_compute(&material, crate::io::cache_dir().as_deref(), &mut |_| {})
+                .map_err(|e| anyhow::anyhow!("script: the probe's surface compliance: {e:#}"))?;
+        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::new(compliance, grid)));
+    }
     let rest = grid.positions();
     let mut out = Outcome {
         object: material.name.clone(),
@@ -252,9 +363,11 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         dt: sim.dt,
         note,
         nodes_per_axis: grid.n(),
+        contact: script.contact,
         steps: 0,
         events: Vec::new(),
         force_depth: Vec::new(),
+        force_path: Vec::new(),
         blow_ups: Vec::new(),
     };
     let last = script.actions.len().saturating_sub(1);
@@ -327,6 +440,10 @@ fn run_action(i: usize, action: &Action, sim: &mut Simulation, out: &mut Outcome
             probe(i, (*at, *direction, *radius, *depth), n.max(1), *samples as u64, sim, out)?;
             Ok("probe")
         }
+        Action::ProbePath { radius, direction, keys, sample_hz, .. } => {
+            probe_path(i, (*radius, *direction, keys, *sample_hz), n.max(1), sim, out)?;
+            Ok("probe_path")
+        }
         Action::Release { .. } => {
             sim.tool = Tool::None;
             sim.tool_force = [0.0; 3];
@@ -361,6 +478,36 @@ fn probe(
         if s * samples % n < samples {
             let along = -(DVec3::from(sim.tool_force).dot(DVec3::from(dir)));
             out.force_depth.push(ProbeSample { action: i, depth_m: d, force_n: along });
+        }
+    }
+    Ok(())
+}
+
+/// A probe path action `i`: `(radius, direction, keys, sample_hz)` over `n` steps.
+fn probe_path(
+    i: usize,
+    (radius, direction, keys, sample_hz): (f64, [f64; 3], &[PathKey], f64),
+    n: u64,
+    sim: &mut Simulation,
+    out: &mut Outcome,
+) -> anyhow::Result<()> {
+    let len = DVec3::from(direction).length();
+    let dir = DVec3::from(direction) / len;
+    let total = keys.last().map_or(0.0, |k| k.t);
+    let mut next_sample = 0.0;
+    let mut sampled = 0u64;
+    for s in 1..=n {
+        let t = total * s as f64 / n as f64;
+        let (at, depth) = path_at(keys, t);
+        let centre = (DVec3::from(at) - radius * dir + depth * dir).to_array();
+        sim.tool = Tool::Probe { centre, radius };
+        step(sim, out)?;
+        if t >= next_sample - 1e-9 * sim.dt || s == n && sampled == 0 {
+            let force = sim.tool_force;
+            let force_n = -DVec3::from(force).dot(dir);
+            out.force_path.push(PathSample { action: i, t, at, depth_m: depth, force_n, force });
+            sampled += 1;
+            next_sample = ((t * sample_hz).floor() + 1.0) / sample_hz;
         }
     }
     Ok(())

@@ -1,0 +1,234 @@
+//! The hex8 FEM of the cube on a graded tensor-product mesh: boxes of a fine spacing around one
+//! point, growing geometrically away from it. This is how the continuum's answer to a small tool
+//! is computed without a uniformly fine cube: the same element ([`super::element`], exact on
+//! boxes), assembled over node coordinates chosen per axis.
+
+use std::collections::HashMap;
+
+use super::element::{ElementStiffness, hex8_box_stiffness};
+use crate::mechanics::grid::CUBE_SIDE_M;
+use crate::mechanics::material::Material;
+use crate::mechanics::sparse::{SparseError, SpdSystem};
+
+/// Node coordinates of a tensor-product mesh of the cube, per axis, ascending from 0 to the side.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GradedMesh {
+    /// x, y and z coordinates of the node planes, metres.
+    pub axes: [Vec<f64>; 3],
+}
+
+/// Node coordinates on `[0, length]`: spacing `fine` within `half_width` of `centre` (nodes at
+/// `centre + i fine`), then steps growing by `growth` towards both ends; a last step shorter
+/// than half the one before is merged into it.
+pub fn graded_axis(length: f64, centre: f64, fine: f64, half_width: f64, growth: f64) -> Vec<f64> {
+    let lo = (centre - half_width).max(0.0);
+    let hi = (centre + half_width).min(length);
+    let first = ((lo - centre) / fine).ceil() as i64;
+    let last = ((hi - centre) / fine).floor() as i64;
+    let mut core: Vec<f64> = (first..=last).map(|i| centre + i as f64 * fine).collect();
+    if core.is_empty() {
+        core.push(centre.clamp(0.0, length));
+    }
+    // A node closer to an end than half the fine spacing moves onto it.
+    if core[0] < 0.5 * fine {
+        core[0] = 0.0;
+    }
+    let top = core.len() - 1;
+    if length - core[top] < 0.5 * fine {
+        core[top] = length;
+    }
+    let mut below = extend(core[0], 0.0, fine, growth);
+    let above = extend(core[top], length, fine, growth);
+    below.reverse();
+    below.extend(core);
+    below.extend(above);
+    below
+}
+
+/// Nodes from `start` (excluded) to `end` (included), steps `fine growth^k`, k = 1, 2, ...; the
+/// last step is between half and one and a half times the growing step.
+fn extend(start: f64, end: f64, fine: f64, growth: f64) -> Vec<f64> {
+    let sign = if end >= start { 1.0 } else { -1.0 };
+    let mut out = Vec::new();
+    let mut x = start;
+    let mut step = fine;
+    while (end - x) * sign > 0.0 {
+        step *= growth;
+        if (end - x) * sign < 1.5 * step {
+            out.push(end);
+            break;
+        }
+        x += sign * step;
+        out.push(x);
+    }
+    out
+}
+
+impl GradedMesh {
+    /// A mesh of the cube fine (`fine` metres) within `half_width` of `point` along each axis,
+    /// steps growing by `growth` beyond.
+    pub fn around(point: [f64; 3], fine: f64, half_width: f64, growth: f64) -> Self {
+        Self { axes: [0, 1, 2].map(|a| graded_axis(CUBE_SIDE_M, point[a], fine, half_width, growth)) }
+    }
+
+    /// Node planes per axis.
+    pub fn dims(&self) -> [usize; 3] {
+        [0, 1, 2].map(|a| self.axes[a].len())
+    }
+
+    /// Number of nodes.
+    pub fn num_nodes(&self) -> usize {
+        self.dims().iter().product()
+    }
+
+    /// Linear index of node `(i, j, k)`, x fastest (the grid's convention).
+    pub fn node(&self, ijk: [usize; 3]) -> usize {
+        let [nx, ny, _] = self.dims();
+        ijk[0] + nx * (ijk[1] + ny * ijk[2])
+    }
+
+    /// `(i, j, k)` of a node.
+    pub fn ijk(&self, node: usize) -> [usize; 3] {
+        let [nx, ny, _] = self.dims();
+        [node % nx, (node / nx) % ny, node / (nx * ny)]
+    }
+
+    /// Rest position of a node, metres.
+    pub fn position(&self, node: usize) -> [f64; 3] {
+        let ijk = self.ijk(node);
+        [0, 1, 2].map(|a| self.axes[a][ijk[a]])
+    }
+
+    /// Whether a node lies on the cube's boundary.
+    pub fn on_boundary(&self, node: usize) -> bool {
+        let ijk = self.ijk(node);
+        let dims = self.dims();
+        (0..3).any(|a| ijk[a] == 0 || ijk[a] + 1 == dims[a])
+    }
+
+    /// The smallest element side, metres.
+    pub fn finest(&self) -> f64 {
+        self.axes.iter().flat_map(|x| x.windows(2).map(|w| w[1] - w[0])).fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// The stiffness of `material` on a graded mesh with face z = 0 clamped, factorised.
+#[derive(Debug)]
+pub struct GradedFem {
+    /// The mesh.
+    pub mesh: GradedMesh,
+    /// Clamped dofs.
+    pub fixed: Vec<bool>,
+    system: SpdSystem,
+}
+
+impl GradedFem {
+    /// Assembles and factorises `K` of `material` on `mesh`, face z = 0 clamped.
+    pub fn clamped_bottom(mesh: GradedMesh, material: &Material) -> Result<Self, SparseError> {
+        let [nx, ny, nz] = mesh.dims();
+        let n = 3 * mesh.num_nodes();
+        let elements = (nx - 1) * (ny - 1) * (nz - 1);
+        // One element matrix per distinct box (the mesh has few distinct sides).
+        let mut matrices: HashMap<[u64; 3], ElementStiffness> = HashMap::new();
+        let mut entries = Vec::with_capacity(elements * 300);
+        let mut values = Vec::with_capacity(elements * 300);
+        for k in 0..nz - 1 {
+            for j in 0..ny - 1 {
+                for i in 0..nx - 1 {
+                    let sides = [(0, i), (1, j), (2, k)].map(|(a, c)| mesh.axes[a][c + 1] - mesh.axes[a][c]);
+                    let ke = matrices
+                        .entry(sides.map(f64::to_bits))
+                        .or_insert_with(|| hex8_box_stiffness(&material.stiffness, sides));
+                    let nodes = super::element::NODE_SIGNS.map(|s| {
+                        let o = s.map(|v| usize::from(v > 0.0));
+                        mesh.node([i + o[0], j + o[1], k + o[2]])
+                    });
+                    let dof = |l: usize| 3 * nodes[l / 3] + l % 3;
+                    for a in 0..24 {
+                        for b in 0..=a {
+                            entries.push((dof(a), dof(b)));
+                            values.push(ke[(a, b)]);
+                        }
+                    }
+                }
+            }
+        }
+        let (mut system, slots) = SpdSystem::new(n, &entries)?;
+        drop(entries);
+        for (&slot, &v) in slots.iter().zip(&values) {
+            system.add(slot, v);
+        }
+        let fixed: Vec<bool> = (0..n).map(|d| mesh.ijk(d / 3)[2] == 0).collect();
+        system.decouple(&fixed, 1.0);
+        system.factor()?;
+        Ok(Self { mesh, fixed, system })
+    }
+
+    /// Solves `K U = F` in place for `cols` load columns stored one after another (clamped dofs
+    /// answer zero).
+    pub fn solve_columns(&mut self, rhs: &mut [f64], cols: usize) -> Result<(), SparseError> {
+        let n = self.fixed.len();
+        for col in rhs.chunks_exact_mut(n) {
+            for (v, &f) in col.iter_mut().zip(&self.fixed) {
+                if f {
+                    *v = 0.0;
+                }
+            }
+        }
+        self.system.solve_columns_in_place(rhs, cols)
+    }
+
+    /// Nonzeros of the Cholesky factor.
+    pub fn factor_nonzeros(&self) -> usize {
+        self.system.factor_nonzeros()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn axes_cover_the_cube_and_grade_smoothly() {
+        for (centre, fine, half) in
+            [(0.05, 0.001, 0.01), (0.0, 0.0015, 0.012), (0.1, 0.002, 0.02), (0.0971, 0.001, 0.008)]
+        {
+            let x = graded_axis(0.1, centre, fine, half, 1.3);
+            assert_eq!(x[0], 0.0);
+            assert_eq!(*x.last().unwrap(), 0.1);
+            let steps: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
+            assert!(steps.iter().all(|&s| s > 0.4 * fine), "{centre}: {steps:?}");
+            for w in steps.windows(2) {
+                assert!(w[1] / w[0] < 2.5 && w[0] / w[1] < 2.5, "{centre}: {steps:?}");
+            }
+            let near = steps.iter().zip(&x).filter(|(_, xi)| (**xi - centre).abs() < half - fine);
+            assert!(near.clone().all(|(s, _)| *s < fine * 1.0001), "{centre}: {steps:?}");
+        }
+    }
+
+    #[test]
+    fn a_uniform_graded_mesh_is_the_structured_fem() {
+        // With a fine spacing equal to the grid's, the graded FEM solves the clamped cube like the
+        // structured one.
+        let material = Material::object_a();
+        let h = 0.1 / 4.0;
+        let mesh = GradedMesh::around([0.05, 0.05, 0.1], h, 1.0, 1.0);
+        assert_eq!(mesh.dims(), [5, 5, 5]);
+        let mut graded = GradedFem::clamped_bottom(mesh.clone(), &material).unwrap();
+        let grid = crate::mechanics::grid::Grid::new(5).unwrap();
+        let fem = super::super::FemModel::new(grid, &material);
+        let mut f = vec![0.0; 3 * grid.num_nodes()];
+        f[3 * grid.node(2, 1, 4) + 2] = -1.0;
+        f[3 * grid.node(4, 4, 4)] = 0.5;
+        let mut u = f.clone();
+        graded.solve_columns(&mut u, 1).unwrap();
+        let mut solver = super::super::StaticSolver::new(&fem).unwrap();
+        let fixed = crate::mechanics::cases::LoadCase::bottom_clamp(&grid, "t").fixed;
+        solver.constrain(&fixed).unwrap();
+        let reference = solver.solve(&fem, &f).unwrap();
+        let scale = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (a, b) in u.iter().zip(&reference) {
+            assert!((a - b).abs() < 1e-9 * scale, "{a} vs {b}");
+        }
+    }
+}

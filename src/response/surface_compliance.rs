@@ -1,0 +1,399 @@
+//! The contact compliance of the material's top face: how every node of a fine, uniform grid on
+//! the face z = 0.1 m moves under a unit force at any other, from the hex8 FEM of the clamped cube
+//! (face z = 0 held) on a mesh uniform in x and y and graded in z. With it, the force of a rigid
+//! frictionless sphere pressed into the top face anywhere is a small dense contact problem on the
+//! face nodes under the sphere: the material's force at the tool, whatever coarser model shows
+//! the tissue (SOFA's precomputed constraint correction, here of a fine mesh of the material).
+//!
+//! The cube and its (orthotropic, axis-aligned) material are symmetric under `x -> L - x` and
+//! `y -> L - y`, so only the columns of one quadrant's nodes are computed and kept. The contact
+//! solve ([`SurfaceCompliance::press`]) allocates nothing: it works in a [`ContactScratch`].
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt;
+use faer::{Conj, MatMut, Par};
+use glam::DVec3;
+
+use crate::mechanics::fem::graded::{GradedFem, GradedMesh, graded_axis};
+use crate::mechanics::grid::CUBE_SIDE_M;
+use crate::mechanics::material::Material;
+use crate::mechanics::sparse::SparseError;
+
+/// Divisions of the face per axis: 2.5 mm spacing.
+pub const DEFAULT_DIVISIONS: usize = 40;
+/// Depth of the fine layer under the face, metres; the mesh grows by [`GROWTH`] below it.
+const FINE_DEPTH_M: f64 = 0.015;
+/// Growth of the element height below the fine layer.
+const GROWTH: f64 = 1.3;
+/// Quadrant nodes whose columns are solved in one batch.
+const BATCH_NODES: usize = 16;
+/// Most face nodes one contact may involve (the window under the sphere).
+pub const MAX_CONTACT_NODES: usize = 600;
+/// Active-set iterations of one contact solve.
+const MAX_CONTACT_ITERATIONS: usize = 30;
+
+/// The top face's compliance at the nodes of a uniform face grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceCompliance {
+    divisions: usize,
+    /// Per quadrant node `k = i + half j` (`i, j < half`), per force component `b`, per face node
+    /// `q`, per displacement component `a`: metres per newton.
+    columns: Vec<f32>,
+}
+
+/// Errors of the surface compliance.
+#[derive(Debug, thiserror::Error)]
+pub enum ComplianceError {
+    /// The FEM solve failed.
+    #[error(transparent)]
+    Sparse(#[from] SparseError),
+    /// The material couples normal and shear strains: the cube is not mirror-symmetric.
+    #[error("the surface compliance needs an orthotropic material aligned with the cube's axes")]
+    NotOrthotropic,
+    /// More face nodes under the sphere than [`MAX_CONTACT_NODES`].
+    #[error("the sphere covers {0} nodes of the face, above the bound of {MAX_CONTACT_NODES}")]
+    TooLarge(usize),
+    /// The contact compliance lost positive definiteness.
+    #[error("the contact compliance is not positive definite")]
+    NotPositiveDefinite,
+    /// A kept file does not match.
+    #[error("surface compliance file: {0}")]
+    File(String),
+}
+
+impl SurfaceCompliance {
+    /// Quadrant nodes per axis.
+    fn half(&self) -> usize {
+        self.divisions / 2 + 1
+    }
+
+    /// Face nodes per axis.
+    pub fn side(&self) -> usize {
+        self.divisions + 1
+    }
+
+    /// Face node spacing, metres.
+    pub fn spacing(&self) -> f64 {
+        CUBE_SIDE_M / self.divisions as f64
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.columns.len() * 4
+    }
+
+    /// Computes the compliance of `material` with `divisions` face divisions per axis (even);
+    /// `progress(fraction)` is called between batches.
+    pub fn compute(
+        material: &Material,
+        divisions: usize,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<Self, ComplianceError> {
+        let c = &material.stiffness;
+        let coupled = (0..3).any(|i| (3..6).any(|j| c[(i, j)] != 0.0))
+            || c[(3, 4)] != 0.0
+            || c[(3, 5)] != 0.0
+            || c[(4, 5)] != 0.0;
+        if coupled || !divisions.is_multiple_of(2) || divisions < 2 {
+            return Err(ComplianceError::NotOrthotropic);
+        }
+        let l = CUBE_SIDE_M;
+        let s = l / divisions as f64;
+        let xy: Vec<f64> = (0..=divisions).map(|i| if i == divisions { l } else { i as f64 * s }).collect();
+        let z = graded_axis(l, l, s, FINE_DEPTH_M, GROWTH);
+        let mesh = GradedMesh { axes: [xy.clone(), xy, z] };
+        let top = mesh.dims()[2] - 1;
+        let mut fem = GradedFem::clamped_bottom(mesh, material)?;
+        let side = divisions + 1;
+        let half = divisions / 2 + 1;
+        let n = fem.fixed.len();
+        let face = side * side;
+        let mut columns = vec![0.0f32; half * half * 3 * face * 3];
+        let quadrant: Vec<[usize; 2]> = (0..half).flat_map(|j| (0..half).map(move |i| [i, j])).collect();
+        let mut done = 0;
+        for batch in quadrant.chunks(BATCH_NODES) {
+            let cols = 3 * batch.len();
+            let mut rhs = vec![0.0; n * cols];
+            for (b, &[i, j]) in batch.iter().enumerate() {
+                let p = fem.mesh.node([i, j, top]);
+                for c in 0..3 {
+                    rhs[(3 * b + c) * n + 3 * p + c] = 1.0;
+                }
+            }
+            fem.solve_columns(&mut rhs, cols)?;
+            for (b, &[i, j]) in batch.iter().enumerate() {
+                let k = i + half * j;
+                for c in 0..3 {
+                    let col = &rhs[(3 * b + c) * n..(3 * b + c + 1) * n];
+                    let out = &mut columns[(3 * k + c) * face * 3..(3 * k + c + 1) * face * 3];
+                    for q in 0..face {
+                        let node = fem.mesh.node([q % side, q / side, top]);
+                        for a in 0..3 {
+                            out[3 * q + a] = col[3 * node + a] as f32;
+                        }
+                    }
+                }
+            }
+            done += batch.len();
+            progress(done as f64 / quadrant.len() as f64);
+        }
+        Ok(Self { divisions, columns })
+    }
+
+    /// Rest position of face node `q`, metres.
+    pub fn position(&self, q: usize) -> [f64; 3] {
+        let s = self.spacing();
+        [(q % self.side()) as f64 * s, (q / self.side()) as f64 * s, CUBE_SIDE_M]
+    }
+
+    /// Displacement component `a` of face node `q` under a unit force along `b` at face node `p`,
+    /// metres per newton.
+    pub fn entry(&self, p: usize, b: usize, q: usize, a: usize) -> f64 {
+        let (side, half) = (self.side(), self.half());
+        let (pi, pj) = (p % side, p / side);
+        let (qi, qj) = (q % side, q / side);
+        // Mirror p into the quadrant; q goes with it.
+        let (mi, sx) = if pi < half { (pi, 1.0) } else { (side - 1 - pi, -1.0) };
+        let (mj, sy) = if pj < half { (pj, 1.0) } else { (side - 1 - pj, -1.0) };
+        let qi = if sx < 0.0 { side - 1 - qi } else { qi };
+        let qj = if sy < 0.0 { side - 1 - qj } else { qj };
+        let sign = |c: usize| match c {
+            0 => sx,
+            1 => sy,
+            _ => 1.0,
+        };
+        let k = mi + half * mj;
+        let face = side * side;
+        let v = self.columns[(3 * k + b) * face * 3 + 3 * (qi + side * qj) + a];
+        sign(a) * sign(b) * f64::from(v)
+    }
+
+    /// The force of the face on a rigid frictionless sphere (`centre`, `radius`, metres) held
+    /// against it at rest, newtons: every face node the sphere covers is put on it along the
+    /// sphere's normal (linearised), with an active set so that no contact pulls and no covered
+    /// node ends inside. The contact nodes and their normal forces stay in `scratch`.
+    pub fn press(
+        &self,
+        centre: [f64; 3],
+        radius: f64,
+        scratch: &mut ContactScratch,
+    ) -> Result<[f64; 3], ComplianceError> {
+        let c = DVec3::from(centre);
+        // The window: face nodes within a spacing of the sphere's section through the face.
+        let side = self.side();
+        let s = self.spacing();
+        let reach = radius + s;
+        let lo = |x: f64| (((x - reach) / s).floor().max(0.0)) as usize;
+        let hi = |x: f64| (((x + reach) / s).ceil().max(0.0) as usize).min(side - 1);
+        scratch.window.clear();
+        scratch.active.clear();
+        if centre[2] - radius >= CUBE_SIDE_M {
+            return Ok([0.0; 3]);
+        }
+        for j in lo(centre[1])..=hi(centre[1]) {
+            for i in lo(centre[0])..=hi(centre[0]) {
+                let q = i + side * j;
+                let d = DVec3::from(self.position(q)) - c;
+                let dist = d.length();
+                let gap = radius - dist;
+                if gap > -s {
+                    if scratch.window.len() == MAX_CONTACT_NODES {
+                        return Err(ComplianceError::TooLarge(MAX_CONTACT_NODES + 1));
+                    }
+                    let n = if dist > 1e-12 { d / dist } else { DVec3::NEG_Z };
+                    scratch.window.push((q, n.to_array(), gap));
+                }
+            }
+        }
+        // Warm start: the face nodes in contact at the last solve, where it touched; else every
+        // node inside the sphere.
+        for (w, &(q, _, gap)) in scratch.window.iter().enumerate() {
+            if scratch.previous.binary_search(&q).is_ok() && gap > -self.spacing() {
+                scratch.active.push(w);
+            }
+        }
+        if scratch.active.is_empty() {
+            for (w, &(_, _, gap)) in scratch.window.iter().enumerate() {
+                if gap > 0.0 {
+                    scratch.active.push(w);
+                }
+            }
+        }
+        for _ in 0..MAX_CONTACT_ITERATIONS {
+            let m = scratch.active.len();
+            if m == 0 {
+                break;
+            }
+            self.solve_active(scratch)?;
+            // Keep pushing contacts; add window nodes that end inside the sphere.
+            scratch.next.clear();
+            for (k, &w) in scratch.active.iter().enumerate() {
+                if scratch.lambda[k] > 0.0 {
+                    scratch.next.push(w);
+                }
+            }
+            let tol = 1e-9 * radius;
+            for w in 0..scratch.window.len() {
+                if scratch.active.contains(&w) {
+                    continue;
+                }
+                let (q, nq, gap) = scratch.window[w];
+                let un = self.normal_displacement(scratch, q, nq);
+                if un < gap - tol {
+                    scratch.next.push(w);
+                }
+            }
+            scratch.next.sort_unstable();
+            if scratch.next == scratch.active {
+                break;
+            }
+            std::mem::swap(&mut scratch.next, &mut scratch.active);
+        }
+        if scratch.active.is_empty() {
+            scratch.lambda.clear();
+        }
+        scratch.previous.clear();
+        for &w in &scratch.active {
+            scratch.previous.push(scratch.window[w].0);
+        }
+        scratch.previous.sort_unstable();
+        let mut force = DVec3::ZERO;
+        for (k, &w) in scratch.active.iter().enumerate() {
+            force -= DVec3::from(scratch.window[w].1) * scratch.lambda[k];
+        }
+        Ok(force.to_array())
+    }
+
+    /// Normal displacement of face node `q` (normal `nq`) under the active contact forces.
+    fn normal_displacement(&self, scratch: &ContactScratch, q: usize, nq: [f64; 3]) -> f64 {
+        let mut un = 0.0;
+        for (k, &w) in scratch.active.iter().enumerate() {
+            let (p, np, _) = scratch.window[w];
+            un += scratch.lambda[k] * self.normal_normal(p, np, q, nq);
+        }
+        un
+    }
+
+    /// `nq . W(q <- p) np`.
+    fn normal_normal(&self, p: usize, np: [f64; 3], q: usize, nq: [f64; 3]) -> f64 {
+        let mut v = 0.0;
+        for b in 0..3 {
+            if np[b] == 0.0 {
+                continue;
+            }
+            for a in 0..3 {
+                v += nq[a] * np[b] * self.entry(p, b, q, a);
+            }
+        }
+        v
+    }
+
+    /// Solves the active contacts' normal forces into `scratch.lambda`.
+    fn solve_active(&self, scratch: &mut ContactScratch) -> Result<(), ComplianceError> {
+        let m = scratch.active.len();
+        let ContactScratch { window, active, lambda, matrix, stack, .. } = scratch;
+        matrix.resize(m * m, 0.0);
+        lambda.clear();
+        for (j, &wj) in active.iter().enumerate() {
+            let (p, np, _) = window[wj];
+            for (i, &wi) in active.iter().enumerate() {
+                let (q, nq, _) = window[wi];
+                matrix[i + m * j] = self.normal_normal(p, np, q, nq);
+            }
+            lambda.push(window[wj].2);
+        }
+        // Symmetrise (the f32 columns are symmetric only to their rounding).
+        for j in 0..m {
+            for i in 0..j {
+                let v = 0.5 * (matrix[i + m * j] + matrix[j + m * i]);
+                matrix[i + m * j] = v;
+                matrix[j + m * i] = v;
+            }
+        }
+        let mut a = MatMut::from_column_major_slice_mut(&mut matrix[..m * m], m, m);
+        llt::factor::cholesky_in_place(
+            a.as_mut(),
+            Default::default(),
+            Par::Seq,
+            MemStack::new(stack),
+            Default::default(),
+        )
+        .map_err(|_| ComplianceError::NotPositiveDefinite)?;
+        llt::solve::solve_in_place_with_conj(
+            a.as_ref(),
+            Conj::No,
+            MatMut::from_column_major_slice_mut(&mut lambda[..m], m, 1),
+            Par::Seq,
+            MemStack::new(stack),
+        );
+        Ok(())
+    }
+
+    /// The compliance as bytes: a little-endian header (`divisions` as u64) and the f32 columns.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(8 + 4 * self.columns.len());
+        out.extend_from_slice(&(self.divisions as u64).to_le_bytes());
+        for v in &self.columns {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out
+    }
+
+    /// Reads [`SurfaceCompliance::to_bytes`].
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, ComplianceError> {
+        let bad = |why: &str| ComplianceError::File(why.into());
+        let head: [u8; 8] = bytes.get(..8).and_then(|h| h.try_into().ok()).ok_or_else(|| bad("too short"))?;
+        let divisions = u64::from_le_bytes(head) as usize;
+        if !divisions.is_multiple_of(2) || !(2..=200).contains(&divisions) {
+            return Err(bad("bad divisions"));
+        }
+        let side = divisions + 1;
+        let half = divisions / 2 + 1;
+        let len = half * half * 3 * side * side * 3;
+        let body = &bytes[8..];
+        if body.len() != 4 * len {
+            return Err(bad("wrong length"));
+        }
+        let columns: Vec<f32> = body.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        if columns.iter().any(|v| !v.is_finite()) {
+            return Err(bad("not finite"));
+        }
+        Ok(Self { divisions, columns })
+    }
+}
+
+/// Preallocated memory of [`SurfaceCompliance::press`].
+pub struct ContactScratch {
+    /// Face nodes near the sphere: node, outward normal from the centre, depth inside the sphere.
+    pub window: Vec<(usize, [f64; 3], f64)>,
+    /// Window indices in contact.
+    pub active: Vec<usize>,
+    /// Their normal forces, newtons.
+    pub lambda: Vec<f64>,
+    next: Vec<usize>,
+    previous: Vec<usize>,
+    matrix: Vec<f64>,
+    stack: MemBuffer,
+}
+
+impl std::fmt::Debug for ContactScratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ContactScratch").field("active", &self.active.len()).finish()
+    }
+}
+
+impl Default for ContactScratch {
+    fn default() -> Self {
+        let m = MAX_CONTACT_NODES;
+        let req = llt::factor::cholesky_in_place_scratch::<f64>(m, Par::Seq, Default::default());
+        Self {
+            window: Vec::with_capacity(m),
+            active: Vec::with_capacity(m),
+            lambda: Vec::with_capacity(m),
+            next: Vec::with_capacity(m),
+            previous: Vec::with_capacity(m),
+            matrix: Vec::with_capacity(m * m),
+            stack: MemBuffer::new(req),
+        }
+    }
+}
