@@ -75,13 +75,30 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
     let reference = touch_score::Reference::new(&material, grid)?;
     let mut report = touch_score::evaluate(&reference, &material, model.0, model.1)
         .with_context(|| format!("scoring {} of material {}", model.0.name(), material.name))?;
-    if !own_mesh_only {
-        report.material = Some(against_material(&material, grid, model, cache, &contact)?);
-    }
+    let material = if own_mesh_only { None } else { Some(against_material(&material, grid, model, cache, &contact)?) };
     if let Some(label) = label {
         report.object = label;
     }
-    if json { say(&serde_json::to_string_pretty(&report)?) } else { say_raw(&report.to_text()) }
+    let full = Full { report, material };
+    if json {
+        say(&serde_json::to_string_pretty(&full)?)
+    } else {
+        let mut text = full.report.to_text();
+        if let Some(m) = &full.material {
+            text += "\n";
+            text += &m.to_text();
+        }
+        say_raw(&text)
+    }
+}
+
+/// The JSON of `validate`: the touch benchmark's keys and, unless `--own-mesh-only`, `material`.
+#[derive(serde::Serialize)]
+struct Full {
+    #[serde(flatten)]
+    report: touch_score::Report,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    material: Option<crate::validate::probe_score::MaterialReport>,
 }
 
 /// The probe presses of `model` against the material, the same-mesh FEM beside it.

@@ -40,14 +40,35 @@ pub struct BenchReport {
 
 /// One 1 ms tick of `model` in the viewer's scene with the probe pressed 4 mm into the top face
 /// (after 0.2 s of settling), stepping `integrator` at `dt`.
-fn probe_tick(model: crate::sim::Model, integrator: crate::sim::Integrator, dt: f64) -> anyhow::Result<f64> {
+/// How the benchmarked probe touches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ProbeRun {
+    /// Held still, the model's node contact.
+    NodesStill,
+    /// Held still, the material's surface compliance.
+    SurfaceStill,
+    /// Sliding along x at 40 mm/s (moved once per 1 ms tick), the surface compliance.
+    SurfaceSliding,
+}
+
+fn probe_tick(
+    model: crate::sim::Model,
+    integrator: crate::sim::Integrator,
+    dt: f64,
+    run: ProbeRun,
+) -> anyhow::Result<f64> {
     use crate::sim::{Simulation, Tool};
     let material = Material::object_a();
     let grid = Grid::paper();
     let tissue = model.build(&material, None, crate::response::damping::DEFAULT_DAMPING_RATIO)?;
     let mut sim = Simulation::with_tissue(tissue, integrator, dt, Some(&LoadCase::bottom_clamp(&grid, "A")));
+    if run != ProbeRun::NodesStill {
+        let c = crate::sim::surface_probe::load_or_compute(&material, crate::io::cache_dir().as_deref(), &mut |_| {})?;
+        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::new(c, grid)));
+    }
     let r = crate::validate::touch::PROBE_RADIUS_M;
-    sim.tool = Tool::Probe { centre: [0.05, 0.05, crate::mechanics::grid::CUBE_SIDE_M + r - 0.004], radius: r };
+    let z = crate::mechanics::grid::CUBE_SIDE_M + r - 0.004;
+    sim.tool = Tool::Probe { centre: [0.03, 0.05, z], radius: r };
     let steps = (1e-3 / dt).round().max(1.0) as usize;
     let mut failed = None;
     for _ in 0..(0.2 / dt) as usize {
@@ -55,7 +76,12 @@ fn probe_tick(model: crate::sim::Model, integrator: crate::sim::Integrator, dt: 
             failed = Some(e.message);
         }
     }
+    let mut x = 0.03;
     let t = time_per_call(1.0, || {
+        if run == ProbeRun::SurfaceSliding {
+            x = if x > 0.07 { 0.03 } else { x + 4e-5 };
+            sim.tool = Tool::Probe { centre: [x, 0.05, z], radius: r };
+        }
         for _ in 0..steps {
             if let Err(e) = sim.step() {
                 failed = Some(e.message.clone());
@@ -150,6 +176,13 @@ pub fn run() -> anyhow::Result<BenchReport> {
     {
         use crate::mechanics::fem::dynamics::Formulation;
         use crate::sim::{Integrator, Model};
+        let default = Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY);
+        // The viewer's default with the material's surface compliance, the probe still and
+        // sliding (the automatic choice's 4 substeps of a 1 ms tick).
+        for (run, name) in [(ProbeRun::SurfaceStill, "surface"), (ProbeRun::SurfaceSliding, "surface-sliding")] {
+            let key = format!("{}/symplectic/0.00025/{name}", default.name());
+            viewer_tick_with_probe_s.insert(key, probe_tick(default, Integrator::Symplectic, 2.5e-4, run)?);
+        }
         for (model, integrator, dt) in [
             (Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY), Integrator::Symplectic, 1e-4),
             (Model::Fem(Formulation::Corotational), Integrator::Symplectic, 1e-4),
@@ -160,7 +193,7 @@ pub fn run() -> anyhow::Result<BenchReport> {
             (Model::Fem(Formulation::Linear), Integrator::Prefactored, 1e-3),
         ] {
             let key = format!("{}/{}/{dt}", model.name(), integrator.name());
-            viewer_tick_with_probe_s.insert(key, probe_tick(model, integrator, dt)?);
+            viewer_tick_with_probe_s.insert(key, probe_tick(model, integrator, dt, ProbeRun::NodesStill)?);
         }
     }
     Ok(BenchReport {

@@ -209,9 +209,6 @@ pub struct Report {
     pub median_force_error: f64,
     /// Largest `|1 - f_model / f_fem|` over the six modes (fraction).
     pub worst_frequency_error: f64,
-    /// The probe force against the material (absent when not asked for).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub material: Option<crate::validate::probe_score::MaterialReport>,
 }
 
 /// Scores `model` of `material` (a lattice with `params`, its shipped tissue when `None`)
@@ -251,7 +248,6 @@ pub fn evaluate(
         cases,
         modes_hz,
         fem_modes_hz: reference.modes_hz.clone(),
-        material: None,
     })
 }
 
@@ -308,10 +304,6 @@ impl Report {
             100.0 * self.median_force_error,
             100.0 * self.worst_frequency_error
         );
-        if let Some(m) = &self.material {
-            s += "\n";
-            s += &m.to_text();
-        }
         s
     }
 }

@@ -46,6 +46,9 @@
 use glam::DVec3;
 
 mod check;
+mod path;
+
+pub use path::{PathKey, PathSample};
 
 use check::{check_script, check_steps, drag_nodes};
 use serde::{Deserialize, Serialize};
@@ -173,37 +176,6 @@ pub enum Action {
     },
 }
 
-/// One key of a probe path.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PathKey {
-    /// Time from the action's start, s.
-    pub t: f64,
-    /// The point the sphere touches at depth 0, metres.
-    pub at: [f64; 3],
-    /// Depth along the direction, metres.
-    pub depth: f64,
-}
-
-/// The point and depth of a probe path at time `t` (held before the first key and after the
-/// last).
-fn path_at(keys: &[PathKey], t: f64) -> ([f64; 3], f64) {
-    let first = keys[0];
-    if t <= first.t {
-        return (first.at, first.depth);
-    }
-    for w in keys.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        if t <= b.t {
-            let f = (t - a.t) / (b.t - a.t);
-            let at = std::array::from_fn(|c| a.at[c] + f * (b.at[c] - a.at[c]));
-            return (at, a.depth + f * (b.depth - a.depth));
-        }
-    }
-    let last = keys[keys.len() - 1];
-    (last.at, last.depth)
-}
-
 impl Action {
     /// Whether the action asks for node positions in its event.
     pub fn record(&self) -> bool {
@@ -258,23 +230,6 @@ pub struct ProbeSample {
     pub depth_m: f64,
     /// Force of the tissue on the probe along `-direction`, newtons.
     pub force_n: f64,
-}
-
-/// One sample of a probe path.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct PathSample {
-    /// Index of the probe path action.
-    pub action: usize,
-    /// Time from the action's start, s.
-    pub t: f64,
-    /// The point the sphere touches at depth 0, metres.
-    pub at: [f64; 3],
-    /// Depth along the direction, metres.
-    pub depth_m: f64,
-    /// Force of the tissue on the probe along `-direction`, newtons.
-    pub force_n: f64,
-    /// Force of the tissue on the probe, newtons.
-    pub force: [f64; 3],
 }
 
 /// What a script produced.
@@ -441,7 +396,7 @@ fn run_action(i: usize, action: &Action, sim: &mut Simulation, out: &mut Outcome
             Ok("probe")
         }
         Action::ProbePath { radius, direction, keys, sample_hz, .. } => {
-            probe_path(i, (*radius, *direction, keys, *sample_hz), n.max(1), sim, out)?;
+            path::probe_path(i, (*radius, *direction, keys, *sample_hz), n.max(1), sim, out)?;
             Ok("probe_path")
         }
         Action::Release { .. } => {
@@ -478,36 +433,6 @@ fn probe(
         if s * samples % n < samples {
             let along = -(DVec3::from(sim.tool_force).dot(DVec3::from(dir)));
             out.force_depth.push(ProbeSample { action: i, depth_m: d, force_n: along });
-        }
-    }
-    Ok(())
-}
-
-/// A probe path action `i`: `(radius, direction, keys, sample_hz)` over `n` steps.
-fn probe_path(
-    i: usize,
-    (radius, direction, keys, sample_hz): (f64, [f64; 3], &[PathKey], f64),
-    n: u64,
-    sim: &mut Simulation,
-    out: &mut Outcome,
-) -> anyhow::Result<()> {
-    let len = DVec3::from(direction).length();
-    let dir = DVec3::from(direction) / len;
-    let total = keys.last().map_or(0.0, |k| k.t);
-    let mut next_sample = 0.0;
-    let mut sampled = 0u64;
-    for s in 1..=n {
-        let t = total * s as f64 / n as f64;
-        let (at, depth) = path_at(keys, t);
-        let centre = (DVec3::from(at) - radius * dir + depth * dir).to_array();
-        sim.tool = Tool::Probe { centre, radius };
-        step(sim, out)?;
-        if t >= next_sample - 1e-9 * sim.dt || s == n && sampled == 0 {
-            let force = sim.tool_force;
-            let force_n = -DVec3::from(force).dot(dir);
-            out.force_path.push(PathSample { action: i, t, at, depth_m: depth, force_n, force });
-            sampled += 1;
-            next_sample = ((t * sample_hz).floor() + 1.0) / sample_hz;
         }
     }
     Ok(())
