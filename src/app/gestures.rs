@@ -1,5 +1,11 @@
 //! Mouse tools and gestures on the 3D view: orbit and zoom the camera, drag a picked node, press
-//! the probe. Gestures turn into [`Request`]s; nothing here talks to the physics thread.
+//! and slide the probe (palpation). Gestures turn into [`Request`]s; nothing here talks to the
+//! physics thread.
+//!
+//! The probe: the left button touches the surface under the cursor; moving down pushes the sphere
+//! in along the view ray (0.1 mm per pixel), the wheel too (0.25 mm a notch); with Shift held the
+//! touch point follows the cursor across the surface at the depth reached (in the plane through
+//! the first touch, across the push direction): pressing, holding and sliding, as a hand palpates.
 
 use glam::Vec3;
 
@@ -26,14 +32,16 @@ pub enum Gesture {
         /// A point of the drag plane.
         plane_point: Vec3,
     },
-    /// Pressing the probe along `dir` from where it first touched.
+    /// Pressing the probe along `dir` at `contact`, `depth` deep.
     Probe {
-        /// First contact point.
+        /// The touched point (moves when sliding).
         contact: Vec3,
-        /// Push direction (the view ray).
+        /// Push direction (the view ray at the first touch).
         dir: Vec3,
-        /// Pointer height at the start, pixels.
-        start_y: f32,
+        /// Pointer height at the last event, pixels.
+        last_y: f32,
+        /// Depth, metres.
+        depth: f32,
     },
 }
 
@@ -65,11 +73,12 @@ pub fn view_input(
     let ndc = |p: egui::Pos2| {
         [2.0 * (p.x - rect.left()) / rect.width() - 1.0, 1.0 - 2.0 * (p.y - rect.top()) / rect.height()]
     };
-    if response.hovered() {
-        let scroll = ctx.input(|i| i.smooth_scroll_delta.y);
-        if scroll != 0.0 {
-            camera.zoom(scroll / 50.0);
-        }
+    let scroll = ctx.input(|i| i.smooth_scroll_delta.y);
+    if let Gesture::Probe { depth, .. } = gesture {
+        // While probing the wheel sets the depth: 0.25 mm a notch (50 points).
+        *depth = (*depth + scroll / 50.0 * 2.5e-4).clamp(0.0, MAX_REACH_M);
+    } else if response.hovered() && scroll != 0.0 {
+        camera.zoom(scroll / 50.0);
     }
     if response.dragged_by(egui::PointerButton::Secondary)
         || (response.dragged_by(egui::PointerButton::Primary) && scene.tool == ToolKind::Orbit)
@@ -88,7 +97,7 @@ pub fn view_input(
                 ToolKind::Drag => Gesture::Drag { node, plane_point: Vec3::from(scene.positions[node]) },
                 ToolKind::Probe => {
                     requests.push(Request::ProbeStarted);
-                    Gesture::Probe { contact: Vec3::from(hit), dir: d, start_y: pos.y }
+                    Gesture::Probe { contact: Vec3::from(hit), dir: d, last_y: pos.y, depth: 0.0 }
                 }
                 ToolKind::Orbit => Gesture::None,
             };
@@ -111,10 +120,23 @@ pub fn view_input(
                     requests.push(Request::Tool(Tool::Drag { node, target: target.as_dvec3().to_array() }));
                 }
             }
-            Gesture::Probe { contact, dir, start_y } => {
+            Gesture::Probe { mut contact, dir, last_y, mut depth } => {
                 let r = (scene.probe_radius_mm * 1e-3) as f32;
-                // 0.1 mm of indentation per pixel dragged downwards, at most half the cube's side.
-                let depth = ((pos.y - start_y) * 1e-4).clamp(0.0, MAX_REACH_M);
+                if ctx.input(|i| i.modifiers.shift) {
+                    // Slide: the touch point under the cursor, in the plane through the touch
+                    // across the push direction, within reach of the cube.
+                    let (o, d) = camera.ray(ndc(pos), aspect);
+                    let denom = d.dot(dir);
+                    if denom.abs() > 1e-6 {
+                        let t = (contact - o).dot(dir) / denom;
+                        let centre = Vec3::splat(0.05);
+                        contact = centre + (o + t * d - centre).clamp_length_max(0.1);
+                    }
+                } else {
+                    // 0.1 mm of indentation per pixel dragged downwards, at most half the side.
+                    depth = (depth + (pos.y - last_y) * 1e-4).clamp(0.0, MAX_REACH_M);
+                }
+                *gesture = Gesture::Probe { contact, dir, last_y: pos.y, depth };
                 let centre = contact - r * dir + depth * dir;
                 requests
                     .push(Request::Tool(Tool::Probe { centre: centre.as_dvec3().to_array(), radius: f64::from(r) }));

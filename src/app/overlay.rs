@@ -223,3 +223,66 @@ fn ramp(t: f32) -> egui::Color32 {
     let c: [f32; 3] = std::array::from_fn(|k| stops[i][k] * (1.0 - f) + stops[i + 1][k] * f);
     egui::Color32::from_rgb((c[0] * 255.0) as u8, (c[1] * 255.0) as u8, (c[2] * 255.0) as u8)
 }
+
+/// Samples kept by [`ForceTrace`] (a few seconds of frames).
+const TRACE_LEN: usize = 240;
+
+/// The probe's recent force, newtons, shown as a number and a small plot next to the sphere in
+/// the 3D view. A ring buffer: pushing allocates nothing.
+#[derive(Debug, Clone)]
+pub struct ForceTrace {
+    values: [f32; TRACE_LEN],
+    len: usize,
+    head: usize,
+}
+
+impl Default for ForceTrace {
+    fn default() -> Self {
+        Self { values: [0.0; TRACE_LEN], len: 0, head: 0 }
+    }
+}
+
+impl ForceTrace {
+    /// Adds a sample.
+    pub fn push(&mut self, force_n: f32) {
+        self.values[self.head] = force_n;
+        self.head = (self.head + 1) % TRACE_LEN;
+        self.len = (self.len + 1).min(TRACE_LEN);
+    }
+
+    /// Forgets every sample.
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    fn sample(&self, i: usize) -> f32 {
+        self.values[(self.head + TRACE_LEN - self.len + i) % TRACE_LEN]
+    }
+
+    /// Draws the last force and the trace in a small box with its top-left corner at `at`.
+    pub fn draw(&self, painter: &egui::Painter, at: egui::Pos2) {
+        if self.len == 0 {
+            return;
+        }
+        let size = egui::vec2(150.0, 56.0);
+        let frame = egui::Rect::from_min_size(at, size);
+        painter.rect_filled(frame, 4.0, egui::Color32::from_black_alpha(170));
+        let last = self.sample(self.len - 1);
+        painter.text(
+            at + egui::vec2(6.0, 4.0),
+            egui::Align2::LEFT_TOP,
+            format!("{last:.2} N"),
+            egui::FontId::proportional(16.0),
+            egui::Color32::WHITE,
+        );
+        let top = (0..self.len).map(|i| self.sample(i)).fold(1e-3f32, f32::max);
+        let plot = egui::Rect::from_min_max(at + egui::vec2(6.0, 24.0), at + size - egui::vec2(6.0, 4.0));
+        let points: Vec<egui::Pos2> = (0..self.len)
+            .map(|i| {
+                let x = plot.left() + plot.width() * i as f32 / (TRACE_LEN - 1) as f32;
+                egui::pos2(x, plot.bottom() - plot.height() * (self.sample(i) / top).clamp(0.0, 1.0))
+            })
+            .collect();
+        painter.add(egui::Shape::line(points, egui::Stroke::new(1.5, egui::Color32::from_rgb(255, 170, 60))));
+    }
+}

@@ -207,6 +207,33 @@ struct Loop {
     owed: f64,
     /// The material's surface compliance for the probe, when the viewer has one.
     compliance: Option<Arc<crate::response::surface_compliance::SurfaceCompliance>>,
+    /// The probe gliding to the last mouse sample.
+    glide: Option<Glide>,
+    /// When the last tool command came.
+    last_tool_at: Option<Instant>,
+}
+
+/// The probe's motion between two mouse samples: from where it is to the new sample, over the
+/// time between samples, so that it moves at the physics rate rather than once per frame.
+#[derive(Debug, Clone, Copy)]
+struct Glide {
+    from: [f64; 3],
+    to: [f64; 3],
+    radius: f64,
+    start: Instant,
+    duration: Duration,
+}
+
+/// The longest glide: after a pause, the next sample is reached within this.
+const MAX_GLIDE: Duration = Duration::from_millis(50);
+
+impl Glide {
+    /// The probe now, and whether it has arrived.
+    fn at(&self, now: Instant) -> (Tool, bool) {
+        let f = ((now - self.start).as_secs_f64() / self.duration.as_secs_f64()).min(1.0);
+        let centre = std::array::from_fn(|c| self.from[c] + f * (self.to[c] - self.from[c]));
+        (Tool::Probe { centre, radius: self.radius }, f >= 1.0)
+    }
 }
 
 impl Loop {
@@ -234,7 +261,18 @@ impl Loop {
                 Err(e) => self.note = Some(format!("damping ratio refused: {e}")),
             },
             Command::SetTool(t) => {
-                sim.tool = t;
+                let now = Instant::now();
+                match (sim.tool, t) {
+                    (Tool::Probe { centre: from, radius: r0 }, Tool::Probe { centre: to, radius }) if r0 == radius => {
+                        let since = self.last_tool_at.map_or(TICK, |t| now - t).clamp(TICK, MAX_GLIDE);
+                        self.glide = Some(Glide { from, to, radius, start: now, duration: since });
+                    }
+                    _ => {
+                        sim.tool = t;
+                        self.glide = None;
+                    }
+                }
+                self.last_tool_at = Some(now);
                 self.tools += 1;
             }
             Command::ApplyCase(c) => sim.apply_case(&c),
@@ -246,6 +284,7 @@ impl Loop {
                 Ok(tissue) => {
                     *sim = Simulation::with_tissue(tissue, Integrator::Symplectic, r.dt, Some(&r.case));
                     self.attach_surface_probe(sim);
+                    self.glide = None;
                     self.note = sim.set_integrator(r.integrator, r.dt);
                     self.message = None;
                     self.owed = 0.0;
@@ -299,7 +338,16 @@ fn run(
 ) {
     let start = Instant::now();
     let mut next = start;
-    let mut state = Loop { message: None, note, tools: 0, paused: false, owed: 0.0, compliance: None };
+    let mut state = Loop {
+        message: None,
+        note,
+        tools: 0,
+        paused: false,
+        owed: 0.0,
+        compliance: None,
+        glide: None,
+        last_tool_at: None,
+    };
     let (mut window_start, mut ticks, mut steps, mut busy) = (Instant::now(), 0u64, 0u64, Duration::ZERO);
     let mut rates = Rates::default();
     let (mut ticks_total, mut steps_total) = (0u64, 0u64);
@@ -315,6 +363,13 @@ fn run(
         // machine falls behind instead of spiralling.
         state.owed = (state.owed + TICK.as_secs_f64()).min(20.0 * TICK.as_secs_f64());
         let t0 = Instant::now();
+        if let Some(glide) = state.glide {
+            let (tool, arrived) = glide.at(t0);
+            sim.tool = tool;
+            if arrived {
+                state.glide = None;
+            }
+        }
         while !state.paused && state.owed >= sim.dt * 0.999 {
             if let Err(b) = sim.step() {
                 state.message = Some(if b.fatal {

@@ -11,7 +11,7 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy}
 use winit::window::WindowId;
 
 use super::gestures::{Gesture, Scene, view_input};
-use super::overlay::{Overlay, Show, legend};
+use super::overlay::{ForceTrace, Overlay, Show, legend};
 use super::panel::study::StudyPanel;
 use super::panel::{self, PanelContext};
 use super::physics::{Command, PhysicsThread, Published};
@@ -39,6 +39,8 @@ struct App {
     gesture: Gesture,
     mesh: SurfaceMesh,
     overlay: Overlay,
+    /// The probe's recent force, drawn next to the sphere.
+    trace: ForceTrace,
     requests: Vec<Request>,
     view_rect: egui::Rect,
     max_frames: Option<u64>,
@@ -83,6 +85,7 @@ impl App {
             gesture: Gesture::None,
             mesh: SurfaceMesh::new(&grid),
             overlay: Overlay::new(&grid),
+            trace: ForceTrace::default(),
             requests: Vec::with_capacity(16),
             view_rect: egui::Rect::NOTHING,
             max_frames,
@@ -158,9 +161,35 @@ impl App {
                 if settings.colour != ColourMode::None {
                     legend(ui, rect, settings.colour, &self.overlay.range);
                 }
+                self.force_beside_the_probe(ui.painter(), rect);
             });
         });
         Some(full)
+    }
+
+    /// The probe's force as a number and a small plot next to the sphere in the 3D view.
+    fn force_beside_the_probe(&mut self, painter: &egui::Painter, rect: egui::Rect) {
+        let crate::sim::Tool::Probe { centre, radius } = self.state.shown.tool else {
+            self.trace.clear();
+            return;
+        };
+        let f = self.latest.tool_force;
+        self.trace.push(glam::DVec3::from(f).length() as f32);
+        let aspect = rect.width() / rect.height().max(1.0);
+        let c = glam::DVec3::from(centre).as_vec3();
+        let clip = self.camera.view_proj(aspect) * c.extend(1.0);
+        if clip.w <= 0.0 {
+            return;
+        }
+        let ndc = clip.truncate() / clip.w;
+        let at = egui::pos2(
+            rect.left() + 0.5 * (ndc.x + 1.0) * rect.width(),
+            rect.top() + 0.5 * (1.0 - ndc.y) * rect.height(),
+        );
+        // Beside the sphere, kept inside the view.
+        let offset = egui::vec2(30.0 + 400.0 * radius as f32, -80.0);
+        let corner = (at + offset).clamp(rect.min, rect.max - egui::vec2(150.0, 56.0));
+        self.trace.draw(painter, corner);
     }
 
     fn frame(&mut self) -> anyhow::Result<()> {

@@ -25,7 +25,7 @@ pub fn show(
     });
     ui.label("Left mouse: the tool; right mouse: rotate; wheel: zoom.");
     if settings.tool == ToolKind::Probe {
-        ui.add(egui::Slider::new(&mut settings.probe_radius_mm, 2.0..=30.0).text("probe radius (mm)"));
+        probe_settings(ui, settings);
     }
     let f = ctx.published.tool_force;
     let norm = DVec3::from(f).length();
@@ -98,6 +98,16 @@ pub fn show(
             100.0 * max / h
         ));
     }
+}
+
+/// How to press and slide the probe, and its size.
+fn probe_settings(ui: &mut egui::Ui, settings: &mut ViewSettings) {
+    ui.label(
+        "Probe: press with the left button and move down to push (0.1 mm a pixel) or turn the wheel (0.25 mm a \
+         notch); hold Shift and move to slide it across the surface at that depth (palpation). The force shows \
+         next to the sphere.",
+    );
+    ui.add(egui::Slider::new(&mut settings.probe_radius_mm, 2.0..=30.0).text("probe radius (mm)"));
 }
 
 /// What the probe touches: the material's surface compliance, or the model's nodes until it is

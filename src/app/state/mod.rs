@@ -440,6 +440,29 @@ mod tests {
     }
 
     #[test]
+    fn the_probe_gets_the_materials_surface_compliance_in_the_background() {
+        let (mut state, physics) = started();
+        let mut send = |c| physics.send(c).expect("physics runs");
+        // Loaded from the cache folder, or computed there (about 25 s) the first time.
+        let mut p = Published::default();
+        for _ in 0..1800 {
+            state.poll(&mut send);
+            physics.latest(&mut p);
+            if p.surface_probe {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        }
+        assert!(p.surface_probe, "{:?}", state.shown.contact_status);
+        assert!(state.shown.contact_status.is_none());
+        // Pressed 4 mm into the middle of the top face: the material's force, about 9 N (A).
+        let r = 0.015;
+        state.handle(Request::Tool(Tool::Probe { centre: [0.05, 0.05, 0.1 + r - 0.004], radius: r }), &mut send);
+        let p = wait_until(&physics, |p| p.tool_force[2] > 5.0);
+        assert!((8.5..10.5).contains(&p.tool_force[2]), "{:?}", p.tool_force);
+    }
+
+    #[test]
     fn the_fem_runs_in_place_of_the_lattice_and_back() {
         let (mut state, physics) = started();
         let mut send = |c| physics.send(c).expect("physics runs");
