@@ -213,6 +213,10 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     assert!(points.iter().all(|p| (p.n == 8) != p.dyn_err_pct.is_nan() && (p.n == 8) != p.period_err_pct.is_nan()));
     assert!(points.iter().all(|p| (p.cost_per_sim_s / (p.step_s / p.dt_s) - 1.0).abs() < 1e-12));
     assert!(points.iter().any(|p| p.pareto_dynamic), "a dynamic Pareto front is marked");
+    // The probe against the material at every resolution: the model's own node contact, and the
+    // material's surface compliance (within the 7 % budget on the validation presses).
+    assert!(header.contains("probe_err_pct") && header.contains("surface_probe_err_pct"), "{header}");
+    assert!(points.iter().all(|p| p.probe_err_pct.is_finite() && p.surface_probe_err_pct < 7.0), "{csv}");
     assert!(std::fs::read_to_string(out.join("chart_dynamic.svg")).expect("svg").contains("<svg"));
     let md = std::fs::read_to_string(out.join("chart.md")).expect("md");
     assert!(md.contains("Where the dynamic error crosses 5 %"), "{md}");
@@ -223,7 +227,7 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     let o = run(&["choose", "--chart", chart_s, "--max-error", "5", "--rate", "1000"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(text.contains("Chosen:"), "{text}");
+    assert!(text.contains("Chosen:") && text.contains("probe force error"), "{text}");
     // Dynamic budgets beside the static one.
     let o =
         run(&["choose", "--chart", chart_s, "--max-period-error", "2", "--max-damping-error", "1", "--rate", "1000"]);
@@ -237,6 +241,7 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("No model meets"));
     for bad in [
         vec!["choose", "--chart", chart_s, "--max-error", "-1"],
+        vec!["choose", "--chart", chart_s, "--max-probe-error", "-1"],
         vec!["choose", "--chart", chart_s, "--max-error", "1", "--rate", "0"],
         vec!["choose", "--chart", "/nonexistent/chart.csv", "--max-error", "1"],
         vec!["chart", "--out", out_s, "--resolutions", "50"],

@@ -33,6 +33,16 @@ pub struct ChooseArgs {
     /// critical.
     #[arg(long = "max-damping-error", value_name = "PCT", allow_hyphen_values = true)]
     pub max_damping_error: Option<f64>,
+    /// Probe force budget: the largest probe force error against the material on the validation
+    /// presses, percent (met with the model's own node contact, or with the material's surface
+    /// compliance as the probe's contact, its time added to the tick); 0 leaves it unbounded.
+    #[arg(
+        long = "max-probe-error",
+        value_name = "PCT",
+        default_value_t = crate::study::choose::DEFAULT_MAX_FORCE_ERROR_PCT,
+        allow_hyphen_values = true
+    )]
+    pub max_probe_error: f64,
     /// Real-time step rate the model must keep up with, Hz (1 kHz: haptics).
     #[arg(long, default_value_t = 1000.0, allow_hyphen_values = true)]
     pub rate: f64,
@@ -56,6 +66,7 @@ pub fn run(args: ChooseArgs) -> anyhow::Result<()> {
         rate_hz: args.rate,
         max_period_error_pct: args.max_period_error,
         max_damping_error_pct: args.max_damping_error,
+        max_probe_error_pct: (args.max_probe_error != 0.0).then_some(args.max_probe_error),
     };
     budget.check()?;
     let object = args.object.to_ascii_uppercase();

@@ -18,15 +18,19 @@
 use std::time::Instant;
 
 pub use super::chart_measure::{ERROR_UNIT_M, sample};
-use super::chart_measure::{MAX_COUPLED_IMPLICIT_N, cases, errors, model_points, sampled};
+use super::chart_measure::{MAX_COUPLED_IMPLICIT_N, ProbeFigures, cases, errors, model_points, sampled};
 pub use super::chart_point::{CHART_DAMPING_RATIO, CHARTED, ChartPoint, IMPLICIT_STEPS_S, integrator_chart_name};
 pub use super::pareto::{crossing, mark_pareto};
+use super::timing::time_per_call;
 use crate::mechanics::fem::FemModel;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 pub use crate::response::single_mode::damped_explicit_limit;
+use crate::response::surface_compliance::ContactScratch;
 use crate::sim::Model;
 pub use crate::sim::shipped::msm_params_at;
+use crate::validate::continuum_cache::ContinuumCache;
+use crate::validate::probe_score::worst_validation_error;
 
 /// Nodes per axis of the reference FEM.
 pub const REFERENCE_N: usize = 40;
@@ -103,6 +107,48 @@ fn dynamic_references(
     Ok(refs)
 }
 
+/// The material's surface compliance as the probe's contact: its worst validation error against
+/// the material, percent, and its time per 1 ms tick with the probe sliding (one contact solve).
+fn surface_probe_figures(material: &Material, kept: &mut ContinuumCache) -> anyhow::Result<ProbeFigures> {
+    let compliance =
+        crate::sim::surface_probe::load_or_compute(material, crate::io::cache_dir().as_deref(), &mut |_| {})?;
+    let mut scratch = ContactScratch::default();
+    let worst = worst_validation_error(material, kept, &mut |press| {
+        let f = compliance.press(press.centre(), press.radius, &mut scratch)?;
+        Ok(-glam::DVec3::from(f).dot(glam::DVec3::from(press.direction())))
+    })?;
+    // The 15 mm sphere 4 mm deep sliding along x at 40 mm/s.
+    let (r, z) = (0.015, crate::mechanics::grid::CUBE_SIDE_M + 0.015 - 0.004);
+    let mut x = 0.03;
+    let mut failed = None;
+    let tick = time_per_call(0.3, || {
+        x = if x > 0.07 { 0.03 } else { x + 4e-5 };
+        if let Err(e) = compliance.press([x, 0.05, z], r, &mut scratch) {
+            failed = Some(e);
+        }
+    });
+    if let Some(e) = failed {
+        return Err(e.into());
+    }
+    Ok(ProbeFigures { nodes_pct: f64::NAN, surface_pct: 100.0 * worst, surface_tick_s: tick })
+}
+
+/// The worst validation error against the material of `model` at `grid` with its own
+/// surface-node contact, percent (NaN for the axis lattice, which has no small-displacement
+/// answer to a sideways touch).
+fn node_probe_error(material: &Material, model: Model, grid: Grid, kept: &mut ContinuumCache) -> anyhow::Result<f64> {
+    let params = match model {
+        Model::Lattice(crate::mechanics::msm::Topology::Axis) => return Ok(f64::NAN),
+        Model::Lattice(t) => Some(msm_params_at(material, t, &grid)?),
+        Model::Fem(_) => None,
+    };
+    let (mut responder, _) = crate::validate::touch_score::responder(model, params, material, grid)?;
+    let worst = worst_validation_error(material, kept, &mut |press| {
+        crate::validate::probe_score::responder_force_n(&mut responder, press)
+    })?;
+    Ok(100.0 * worst)
+}
+
 /// Computes every point: for each object, model, resolution and integrator.
 pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::Result<(Vec<ChartPoint>, Vec<String>)> {
     let mut points = Vec::new();
@@ -126,6 +172,9 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
             .collect();
         let reference = sampled(&ref_grid, &reference);
         let alpha = |kind: Model| damping_rate(&material, kind);
+        progress(&format!("object {object}: the probe against the material (surface compliance)"));
+        let mut kept = ContinuumCache::open(&material, crate::io::cache_dir().as_deref());
+        let surface = surface_probe_figures(&material, &mut kept)?;
         for &n in &opts.resolutions {
             let grid = Grid::new(n)?;
             let (touch, dynamics) = if n == Grid::paper().n() {
@@ -145,7 +194,8 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
                     start.elapsed().as_secs_f64()
                 ));
                 let refs = (&reference[..], touch.as_ref(), dynamics.as_ref());
-                let mut pts = model_points(object, &material, kind, grid, opts.timing_s, refs, alpha(kind)?)?;
+                let probe = ProbeFigures { nodes_pct: node_probe_error(&material, kind, grid, &mut kept)?, ..surface };
+                let mut pts = model_points(object, &material, kind, grid, opts.timing_s, refs, (alpha(kind)?, probe))?;
                 points.append(&mut pts);
             }
         }

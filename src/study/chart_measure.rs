@@ -37,6 +37,19 @@ struct PointBase<'a> {
     avg: f64,
     max: f64,
     force: f64,
+    probe: ProbeFigures,
+}
+
+/// The probe force errors against the material of one model at one resolution, percent, and
+/// what the surface compliance costs per tick, s.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ProbeFigures {
+    /// With the model's surface-node contact.
+    pub nodes_pct: f64,
+    /// With the material's surface compliance.
+    pub surface_pct: f64,
+    /// The surface compliance's time per 1 ms tick, sliding.
+    pub surface_tick_s: f64,
 }
 
 /// How one point steps: its integrator, wall time per step, explicit limit, step and memory.
@@ -66,6 +79,9 @@ impl PointBase<'_> {
             avg_err_pct: self.avg,
             max_err_pct: self.max,
             force_err_pct: self.force,
+            probe_err_pct: self.probe.nodes_pct,
+            surface_probe_err_pct: self.probe.surface_pct,
+            surface_probe_tick_s: self.probe.surface_tick_s,
             dyn_err_pct: pct(|d| d.trajectory_error),
             tap_err_pct: pct(|d| d.probe_tap_error),
             period_err_pct: pct(|d| d.period_error),
@@ -200,7 +216,8 @@ struct Measured {
     force: f64,
 }
 
-/// The chart's points of `model` of `material` at `grid`, damped at the rate `alpha`.
+/// The chart's points of `model` of `material` at `grid`, damped at the rate `alpha`, with its probe
+/// force errors against the material `probe`.
 pub(super) fn model_points(
     object: &str,
     material: &Material,
@@ -208,14 +225,14 @@ pub(super) fn model_points(
     grid: Grid,
     timing_s: f64,
     (reference, touch, dynamics): References<'_>,
-    alpha: f64,
+    (alpha, probe): (f64, ProbeFigures),
 ) -> anyhow::Result<Vec<ChartPoint>> {
     let m = match model {
         Model::Lattice(t) => measure_msm(object, material, t, grid, timing_s, touch, alpha)?,
         Model::Fem(f) => measure_fem(object, material, f, grid, timing_s, touch.is_some(), alpha)?,
     };
     let (avg, max) = errors(&sampled(&grid, &m.answers), reference);
-    let shared = PointBase { object, model, n: grid.n(), static_s: m.static_s, avg, max, force: m.force };
+    let shared = PointBase { object, model, n: grid.n(), static_s: m.static_s, avg, max, force: m.force, probe };
     let dynamics = dynamics.map(|r| (r, model, m.params));
     points_of(&shared, (m.explicit.0, m.dt_max, m.explicit.1), m.implicit, dynamics)
 }

@@ -97,6 +97,20 @@ pub struct ChartPoint {
     /// paper's 8^3 grid, the scene a user touches) only; NaN at other resolutions, where a point
     /// load's answer depends on the mesh and no common touch reference exists.
     pub force_err_pct: f64,
+    /// Worst probe force error against the material (the converged continuum,
+    /// [`crate::validate::continuum`]) on the validation presses, percent, with the model's own
+    /// surface-node contact at this resolution; NaN where the model has no small-displacement
+    /// answer (the axis lattice). At every resolution: the reference does not depend on the mesh.
+    #[serde(default = "not_scored")]
+    pub probe_err_pct: f64,
+    /// The same with the material's surface compliance as the probe's contact
+    /// ([`crate::sim::surface_probe`]), whatever the model: one figure per object.
+    #[serde(default = "not_scored")]
+    pub surface_probe_err_pct: f64,
+    /// Wall time the surface compliance adds to a 1 ms tick with the probe sliding (one contact
+    /// solve per tick), s.
+    #[serde(default = "not_scored")]
+    pub surface_probe_tick_s: f64,
     /// Dynamic error: the worst trajectory error against the FEM's converged transients (the
     /// viewer scene's top-face step load and its release, first 0.2 s), percent; model and
     /// integrator together. At the viewer's 8^3 only (NaN elsewhere), as the touch scores.
@@ -114,6 +128,11 @@ pub struct ChartPoint {
     pub pareto: bool,
     /// On the Pareto front of (cost per simulated second, dynamic error) for its object.
     pub pareto_dynamic: bool,
+}
+
+/// An error that was not measured (older chart files have no probe columns).
+fn not_scored() -> f64 {
+    f64::NAN
 }
 
 /// The steps of the implicit points, s: from 0.1 ms to one frame at 60 Hz.

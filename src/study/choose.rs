@@ -60,8 +60,22 @@ pub struct Budget {
     /// Largest damping ratio error of the fundamental, percent of critical (not bounded when
     /// `None`).
     pub max_damping_error_pct: Option<f64>,
+    /// Largest probe force error against the material on the validation presses, percent (not
+    /// bounded when `None`): met with the model's own node contact, or else with the material's
+    /// surface compliance as the probe's contact (whose time is added to the tick).
+    pub max_probe_error_pct: Option<f64>,
     /// Real-time step rate, Hz.
     pub rate_hz: f64,
+}
+
+/// How a point meets the probe budget: the contact and the time it adds to a tick, s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProbeContact {
+    /// `nodes` (the model's own), `surface` (the material's surface compliance), or `-` (no
+    /// probe budget).
+    pub name: &'static str,
+    /// Time added to a tick, s.
+    pub tick_s: f64,
 }
 
 impl Budget {
@@ -72,6 +86,29 @@ impl Budget {
             && self.max_error_pct.is_none_or(|m| self.metric.of(p) <= m)
             && self.max_period_error_pct.is_none_or(|m| p.period_err_pct <= m)
             && self.max_damping_error_pct.is_none_or(|m| p.damping_err_pct <= m)
+    }
+
+    /// The cheapest contact with which `p` meets the probe budget, or why none does.
+    pub fn probe_contact(&self, p: &ChartPoint) -> Result<ProbeContact, String> {
+        let Some(m) = self.max_probe_error_pct else { return Ok(ProbeContact { name: "-", tick_s: 0.0 }) };
+        if within(p.probe_err_pct, m) {
+            Ok(ProbeContact { name: "nodes", tick_s: 0.0 })
+        } else if within(p.surface_probe_err_pct, m) && p.surface_probe_tick_s.is_finite() {
+            Ok(ProbeContact { name: "surface", tick_s: p.surface_probe_tick_s })
+        } else if p.probe_err_pct.is_nan() && p.surface_probe_err_pct.is_nan() {
+            Err("no probe score".into())
+        } else {
+            Err(format!(
+                "probe force error {:.1} % (nodes), {:.1} % (surface) > {m} %",
+                p.probe_err_pct, p.surface_probe_err_pct
+            ))
+        }
+    }
+
+    /// Wall time of a tick of `p` with its probe contact, s (infinite when no contact meets the
+    /// probe budget).
+    pub fn tick_with_probe_s(&self, p: &ChartPoint) -> f64 {
+        self.probe_contact(p).map_or(f64::INFINITY, |c| p.tick_s(self.rate_hz) + c.tick_s)
     }
 
     fn accuracy_text(&self) -> String {
@@ -91,6 +128,12 @@ impl Budget {
         }
         if let Some(m) = self.max_damping_error_pct {
             s += &format!(", damping ratio error <= {m} % of critical");
+        }
+        if let Some(m) = self.max_probe_error_pct {
+            s += &format!(
+                ", probe force error <= {m} % (validation presses, vs the material; the model's node contact, or \
+                 the material's surface compliance with its time added to the tick)"
+            );
         }
         s
     }
@@ -118,7 +161,9 @@ pub fn choose(points: &[ChartPoint], object: &str, budget: &Budget) -> Choice {
     let budget_s = 1.0 / rate_hz;
     let mut mine: Vec<&ChartPoint> = points.iter().filter(|p| p.object == object && p.fits_rate(rate_hz)).collect();
     mine.sort_by(|a, b| a.tick_s(rate_hz).total_cmp(&b.tick_s(rate_hz)).then(a.memory_bytes.cmp(&b.memory_bytes)));
-    let ok = |p: &ChartPoint| budget.accurate(p) && p.tick_s(rate_hz) <= budget_s;
+    let ok = |p: &ChartPoint| {
+        budget.accurate(p) && budget.probe_contact(p).is_ok() && budget.tick_with_probe_s(p) <= budget_s
+    };
     let chosen = mine.iter().find(|p| ok(p)).map(|p| (*p).clone());
     let mut s = format!(
         "Budget for object {object}: {}; {rate_hz} Hz (wall time per tick <= {:.1} us, one thread).\n\n",
@@ -127,12 +172,13 @@ pub fn choose(points: &[ChartPoint], object: &str, budget: &Budget) -> Choice {
     );
     let _ = writeln!(
         s,
-        "{:<18} {:>4} {:<9} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>10}  verdict",
+        "{:<18} {:>4} {:<9} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>10}  verdict",
         "model",
         "n",
         "stepper",
         "dt ms",
         "force %",
+        "probe %",
         "avg %",
         "max %",
         "period %",
@@ -142,22 +188,30 @@ pub fn choose(points: &[ChartPoint], object: &str, budget: &Budget) -> Choice {
         "memory kB"
     );
     for p in &mine {
-        let tick = p.tick_s(rate_hz);
-        let verdict = match (budget.accurate(p), tick <= budget_s) {
-            (true, true) => "meets both".to_owned(),
-            (false, true) => format!("too inaccurate ({})", budget.why_inaccurate(p)),
+        let contact = budget.probe_contact(p);
+        let tick = p.tick_s(rate_hz) + contact.as_ref().map_or(0.0, |c| c.tick_s);
+        let accurate = budget.accurate(p) && contact.is_ok();
+        let verdict = match (accurate, tick <= budget_s) {
+            (true, true) => match contact {
+                Ok(ProbeContact { name: "surface", .. }) => "meets both (probe: the surface compliance)".to_owned(),
+                _ => "meets both".to_owned(),
+            },
+            (false, true) if !budget.accurate(p) => format!("too inaccurate ({})", budget.why_inaccurate(p)),
+            (false, true) => format!("too inaccurate ({})", contact.err().unwrap_or_default()),
             (true, false) => format!("too slow ({:.1} us > {:.1} us)", tick * 1e6, budget_s * 1e6),
             (false, false) => "too inaccurate and too slow".to_owned(),
         };
         let mark = if chosen.as_ref().is_some_and(|c| c == *p) { " <= chosen" } else { "" };
         let _ = writeln!(
             s,
-            "{:<18} {:>4} {:<9} {:>8.4} {:>8.2} {:>9.4} {:>9.4} {:>9.3} {:>9.3} {:>9} {:>11.2} {:>10.1}  {verdict}{mark}",
+            "{:<18} {:>4} {:<9} {:>8.4} {:>8.2} {:>8.1} {:>9.4} {:>9.4} {:>9.3} {:>9.3} {:>9} {:>11.2} {:>10.1}  \
+             {verdict}{mark}",
             p.model.chart_name(),
             p.n,
             crate::study::chart::integrator_chart_name(p.integrator),
             p.dt_s * 1e3,
             p.force_err_pct,
+            p.probe_err_pct,
             p.avg_err_pct,
             p.max_err_pct,
             p.period_err_pct,
@@ -179,12 +233,25 @@ fn conclusion(s: &mut String, chosen: Option<&ChartPoint>, mine: &[&ChartPoint],
     let budget_s = 1.0 / rate_hz;
     match chosen {
         Some(c) => {
+            let probe = match budget.probe_contact(c) {
+                Ok(ProbeContact { name: "nodes", .. }) => {
+                    format!("probe force error {:.2} % with its own node contact, ", c.probe_err_pct)
+                }
+                Ok(ProbeContact { name: "surface", tick_s }) => format!(
+                    "probe force error {:.2} % with the material's surface compliance as its contact ({:.2} us of \
+                     the tick; {:.1} % with its own nodes), ",
+                    c.surface_probe_err_pct,
+                    tick_s * 1e6,
+                    c.probe_err_pct
+                ),
+                _ => String::new(),
+            };
             let _ = write!(
                 s,
-                "\nChosen: {} at {}^3 with the {} integrator at dt = {:.4} ms: touch force error {:.2} % (budget {} %), {} \
-                 error {:.4} %, period error {:.3} %, damping error {:.3} % of critical, {:.2} us per tick ({} step(s) \
-                 of {:.2} us; {:.0} % of the tick budget), {:.1} kB. It is the cheapest per tick of the {} points that \
-                 meet both budgets.",
+                "\nChosen: {} at {}^3 with the {} integrator at dt = {:.4} ms: touch force error {:.2} % (budget {} %), \
+                 {probe}{} error {:.4} %, period error {:.3} %, damping error {:.3} % of critical, {:.2} us per tick ({} \
+                 step(s) of {:.2} us; {:.0} % of the tick budget), {:.1} kB. It is the cheapest per tick of the {} \
+                 points that meet both budgets.",
                 c.model.chart_name(),
                 c.n,
                 crate::study::chart::integrator_chart_name(c.integrator),
@@ -195,10 +262,10 @@ fn conclusion(s: &mut String, chosen: Option<&ChartPoint>, mine: &[&ChartPoint],
                 budget.metric.of(c),
                 c.period_err_pct,
                 c.damping_err_pct,
-                c.tick_s(rate_hz) * 1e6,
+                budget.tick_with_probe_s(c) * 1e6,
                 c.substeps(rate_hz),
                 c.step_s * 1e6,
-                100.0 * c.tick_s(rate_hz) / budget_s,
+                100.0 * budget.tick_with_probe_s(c) / budget_s,
                 c.memory_bytes as f64 / 1e3,
                 meeting
             );
@@ -208,7 +275,7 @@ fn conclusion(s: &mut String, chosen: Option<&ChartPoint>, mine: &[&ChartPoint],
                 .iter()
                 .filter(|p| p.tick_s(rate_hz) <= budget_s && !p.force_err_pct.is_nan())
                 .min_by(|a, b| a.force_err_pct.total_cmp(&b.force_err_pct));
-            let accurate = mine.iter().find(|p| budget.accurate(p));
+            let accurate = mine.iter().find(|p| budget.accurate(p) && budget.probe_contact(p).is_ok());
             let _ = write!(s, "\nNo model meets both budgets.");
             if let Some(p) = fast {
                 let _ = write!(
@@ -228,7 +295,7 @@ fn conclusion(s: &mut String, chosen: Option<&ChartPoint>, mine: &[&ChartPoint],
                     p.model.chart_name(),
                     p.n,
                     crate::study::chart::integrator_chart_name(p.integrator),
-                    p.tick_s(rate_hz) * 1e6,
+                    budget.tick_with_probe_s(p) * 1e6,
                     budget_s * 1e6
                 );
             }
@@ -258,6 +325,11 @@ impl Budget {
             {
                 anyhow::bail!("{flag} must be a positive percentage, got {}", crate::io::num(v));
             }
+        }
+        if let Some(v) = self.max_probe_error_pct
+            && !(v.is_finite() && v > 0.0)
+        {
+            anyhow::bail!("--max-probe-error must be a positive percentage, got {}", crate::io::num(v));
         }
         let rate = self.rate_hz;
         if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
@@ -302,6 +374,9 @@ mod tests {
             avg_err_pct: max_err_pct / 5.0,
             max_err_pct,
             force_err_pct,
+            probe_err_pct: f64::NAN,
+            surface_probe_err_pct: f64::NAN,
+            surface_probe_tick_s: f64::NAN,
             pareto: false,
         }
     }
@@ -314,6 +389,7 @@ mod tests {
             rate_hz,
             max_period_error_pct: None,
             max_damping_error_pct: None,
+            max_probe_error_pct: None,
         }
     }
 
@@ -354,5 +430,19 @@ mod tests {
         unscored[1].force_err_pct = f64::NAN;
         let c = choose(&unscored, "A", &budget(6.0, 1000.0));
         assert_ne!(c.chosen.map(|p| p.model), Some(IMPLICIT));
+        // A probe budget: the implicit point's own contact misses it, the surface compliance
+        // meets it for 3 us more per tick (8 us: still in the 1 ms tick) and is chosen so.
+        let mut probed = points.clone();
+        for p in &mut probed {
+            (p.probe_err_pct, p.surface_probe_err_pct, p.surface_probe_tick_s) = (40.0, 5.0, 3e-6);
+        }
+        let b = Budget { max_probe_error_pct: Some(7.0), ..budget(6.0, 1000.0) };
+        let c = choose(&probed, "A", &b);
+        assert_eq!(c.chosen.as_ref().map(|p| p.model), Some(IMPLICIT), "{}", c.explanation);
+        assert!(c.explanation.contains("surface compliance as its contact (3.00 us"), "{}", c.explanation);
+        // A tighter probe budget than either contact meets: nothing is chosen, and it says why.
+        probed[1].probe_err_pct = 8.0;
+        let c = choose(&probed, "A", &Budget { max_probe_error_pct: Some(4.0), ..b });
+        assert!(c.chosen.is_none() && c.explanation.contains("probe force error"), "{}", c.explanation);
     }
 }

@@ -61,13 +61,15 @@ fn points_table(md: &mut String, points: &[ChartPoint]) {
     let _ = writeln!(
         md,
         "| object | model | n | integrator | dt, ms | step, us | cost per simulated s, s | touch force error, % \
-         (validation) | avg % of h | max % of h | dynamic error, % | probe tap force error, % | period error, % | damping \
-         error, % of critical | Pareto static | Pareto dynamic |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+         (validation) | probe force error vs the material, % (own nodes / surface compliance) | avg % of h | max % of \
+         h | dynamic error, % | probe tap force error, % | period error, % | damping error, % of critical | Pareto \
+         static | Pareto dynamic |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for p in points {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {:.4} | {:.2} | {:.4} | {:.2} | {:.4} | {:.4} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {} |",
+            "| {} | {} | {} | {} | {:.4} | {:.2} | {:.4} | {:.2} | {:.1} / {:.1} | {:.4} | {:.4} | {:.3} | {:.3} | {:.3} | \
+             {:.3} | {} | {} |",
             p.object,
             p.model.chart_name(),
             p.n,
@@ -76,6 +78,8 @@ fn points_table(md: &mut String, points: &[ChartPoint]) {
             p.step_s * 1e6,
             p.cost_per_sim_s,
             p.force_err_pct,
+            p.probe_err_pct,
+            p.surface_probe_err_pct,
             p.avg_err_pct,
             p.max_err_pct,
             p.dyn_err_pct,
@@ -175,10 +179,18 @@ pub fn read_chart_csv(path: &Path) -> anyhow::Result<Vec<ChartPoint>> {
             ("tap_err_pct", p.tap_err_pct),
             ("period_err_pct", p.period_err_pct),
             ("damping_err_pct", p.damping_err_pct),
+            ("probe_err_pct", p.probe_err_pct),
+            ("surface_probe_err_pct", p.surface_probe_err_pct),
         ] {
             if !(v.is_nan() || (v.is_finite() && v >= 0.0)) {
                 return Err(bad(format!("{name} = {v} must be a finite non-negative percentage (NaN: not scored)")));
             }
+        }
+        let t = p.surface_probe_tick_s;
+        if !(t.is_nan() || (t.is_finite() && t >= 0.0)) {
+            return Err(bad(format!(
+                "surface_probe_tick_s = {t} must be a finite non-negative time (NaN: not measured)"
+            )));
         }
     }
     if rows.is_empty() {

@@ -18,7 +18,7 @@ const SHIPPED: [&str; 2] =
 /// One material's kept answers: the file's contents.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CacheFile {
-    /// [`VERSION`] of the computation.
+    /// The version of the computation (a change of method makes old files misses).
     pub version: u32,
     /// The material's name.
     pub material: String,

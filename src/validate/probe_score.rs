@@ -128,6 +128,23 @@ pub fn evaluate(
     })
 }
 
+/// The worst `|force / material - 1|` over the validation presses of a probe `force(press)`
+/// (newtons along the press) against `material`'s continuum answers from `cache` (computed and
+/// kept where missing).
+pub fn worst_validation_error(
+    material: &Material,
+    cache: &mut ContinuumCache,
+    force: &mut dyn FnMut(&Press) -> anyhow::Result<f64>,
+) -> anyhow::Result<f64> {
+    let mut worst = 0.0f64;
+    for case in press_cases().iter().filter(|c| c.set == Set::Validation) {
+        let m = cache.force(material, &case.press, crate::validate::continuum::DEFAULT_TOLERANCE, &mut |_| {})?;
+        worst = worst.max((force(&case.press)? / m.force_n - 1.0).abs());
+    }
+    cache.save()?;
+    Ok(worst)
+}
+
 impl MaterialReport {
     /// The table `validate` prints.
     pub fn to_text(&self) -> String {

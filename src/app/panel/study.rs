@@ -139,6 +139,7 @@ impl StudyPanel {
                     rate_hz: self.rate,
                     max_period_error_pct: self.bound_dynamic.then_some(self.dynamic.0),
                     max_damping_error_pct: self.bound_dynamic.then_some(self.dynamic.1),
+                    max_probe_error_pct: Some(self.max_force_error),
                 };
                 self.choice = Some(choose(&self.points, object, &budget));
             }

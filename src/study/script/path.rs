@@ -65,7 +65,10 @@ pub(super) fn probe_path(
     let len = DVec3::from(direction).length();
     let dir = DVec3::from(direction) / len;
     let total = keys.last().map_or(0.0, |k| k.t);
-    let mut next_sample = 0.0;
+    // Sample k is due at t = k / sample_hz; counted in units of samples, with a tolerance of a
+    // millionth of a step, so that rounding never takes one twice or skips one.
+    let mut next_sample = 0.0f64;
+    let tol = 1e-6 * sim.dt * sample_hz;
     let mut sampled = 0u64;
     for s in 1..=n {
         let t = total * s as f64 / n as f64;
@@ -73,12 +76,12 @@ pub(super) fn probe_path(
         let centre = (DVec3::from(at) - radius * dir + depth * dir).to_array();
         sim.tool = Tool::Probe { centre, radius };
         step(sim, out)?;
-        if t >= next_sample - 1e-9 * sim.dt || s == n && sampled == 0 {
+        if t * sample_hz >= next_sample - tol || s == n && sampled == 0 {
             let force = sim.tool_force;
             let force_n = -DVec3::from(force).dot(dir);
             out.force_path.push(PathSample { action: i, t, at, depth_m: depth, force_n, force });
             sampled += 1;
-            next_sample = ((t * sample_hz).floor() + 1.0) / sample_hz;
+            next_sample = (t * sample_hz + tol).floor() + 1.0;
         }
     }
     Ok(())
