@@ -87,4 +87,24 @@ fn explicit_and_implicit_steps_do_not_allocate() {
     }
     let simulated = ALLOCATIONS.load(Ordering::Relaxed) - before;
     assert_eq!(simulated, 0, "allocations in 600 simulation steps with drag, probe and no tool");
+    // The probe on the material's surface compliance (a coarse one here: 10 divisions), the
+    // sphere moving every step: a contact solve each step, in preallocated memory.
+    let material = tissue_sim::mechanics::material::Material::object_a();
+    let compliance =
+        tissue_sim::response::surface_compliance::SurfaceCompliance::compute(&material, 10, &mut |_| {}).expect("c");
+    let probe = tissue_sim::sim::surface_probe::SurfaceProbe::new(std::sync::Arc::new(compliance), grid);
+    sim.set_surface_probe(Some(probe));
+    let at = |i: usize| Tool::Probe { centre: [0.03 + 2e-4 * i as f64, 0.05, 0.1 + 0.015 - 0.004], radius: 0.015 };
+    for i in 0..5 {
+        sim.tool = at(i);
+        sim.step().expect("warm-up step");
+    }
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    for i in 5..205 {
+        sim.tool = at(i);
+        sim.step().expect("step");
+    }
+    assert!(sim.tool_force[2] > 1.0, "the surface compliance pushes back: {:?}", sim.tool_force);
+    let surface = ALLOCATIONS.load(Ordering::Relaxed) - before;
+    assert_eq!(surface, 0, "allocations in 200 steps with the probe sliding on the surface compliance");
 }

@@ -559,6 +559,8 @@ fn validate_prints_the_touch_benchmark_contract() {
     assert!(stderr(&o).contains("no shear stiffness"), "{}", stderr(&o));
     let o = run(&["validate", "--object", "A", "--nodes", "3"]);
     assert!(!o.status.success() && stderr(&o).contains("at least 4 nodes"), "{}", stderr(&o));
+    let o = run(&["validate", "--object", "A", "--cache", "/dev/null/cache"]);
+    assert!(!o.status.success() && stderr(&o).contains("cache folder"), "{}", stderr(&o));
 }
 
 #[test]

@@ -72,6 +72,10 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
         }
     };
     DirectSolve::TouchBenchmark.check_grid(grid.n()).map_err(anyhow::Error::msg)?;
+    // A cache folder given by name must be usable before any work.
+    if let Some(dir) = &cache {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot use the cache folder {}", dir.display()))?;
+    }
     let reference = touch_score::Reference::new(&material, grid)?;
     let mut report = touch_score::evaluate(&reference, &material, model.0, model.1)
         .with_context(|| format!("scoring {} of material {}", model.0.name(), material.name))?;
