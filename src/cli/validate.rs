@@ -40,8 +40,8 @@ pub struct ValidateArgs {
     #[arg(long)]
     pub own_mesh_only: bool,
     /// How the probe touches in the presses against the material: `surface` (the viewer's: the
-    /// material's surface compliance on a 2.5 mm grid of the top face, computed once per
-    /// material, about 25 s, and kept in the cache folder) or `nodes` (the model's surface nodes).
+    /// material's surface compliance on a 2 mm grid of the top face, computed once per
+    /// material, about a minute, and kept in the cache folder) or `nodes` (the model's surface nodes).
     #[arg(long, value_parser = ["surface", "nodes"], default_value = "surface")]
     pub contact: String,
 }

@@ -19,12 +19,12 @@ use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::mechanics::material::Material;
 use crate::mechanics::sparse::SparseError;
 
-/// Divisions of the face per axis: 2.5 mm spacing.
-pub const DEFAULT_DIVISIONS: usize = 40;
+/// Divisions of the face per axis: 2 mm spacing.
+pub const DEFAULT_DIVISIONS: usize = 50;
 /// Depth of the fine layer under the face, metres; the mesh grows by [`GROWTH`] below it.
-const FINE_DEPTH_M: f64 = 0.015;
+const FINE_DEPTH_M: f64 = 0.01;
 /// Growth of the element height below the fine layer.
-const GROWTH: f64 = 1.3;
+const GROWTH: f64 = 1.45;
 /// Quadrant nodes whose columns are solved in one batch.
 const BATCH_NODES: usize = 16;
 /// Most face nodes one contact may involve (the window under the sphere).
@@ -149,6 +149,12 @@ impl SurfaceCompliance {
     /// Displacement component `a` of face node `q` under a unit force along `b` at face node `p`,
     /// metres per newton.
     pub fn entry(&self, p: usize, b: usize, q: usize, a: usize) -> f64 {
+        self.block(p, q)[a][b]
+    }
+
+    /// The 3 x 3 block `W[a][b]`: displacement `a` of face node `q` under a unit force `b` at
+    /// face node `p`, metres per newton.
+    pub fn block(&self, p: usize, q: usize) -> [[f64; 3]; 3] {
         let (side, half) = (self.side(), self.half());
         let (pi, pj) = (p % side, p / side);
         let (qi, qj) = (q % side, q / side);
@@ -157,15 +163,18 @@ impl SurfaceCompliance {
         let (mj, sy) = if pj < half { (pj, 1.0) } else { (side - 1 - pj, -1.0) };
         let qi = if sx < 0.0 { side - 1 - qi } else { qi };
         let qj = if sy < 0.0 { side - 1 - qj } else { qj };
-        let sign = |c: usize| match c {
-            0 => sx,
-            1 => sy,
-            _ => 1.0,
-        };
+        let sign = [sx, sy, 1.0];
         let k = mi + half * mj;
         let face = side * side;
-        let v = self.columns[(3 * k + b) * face * 3 + 3 * (qi + side * qj) + a];
-        sign(a) * sign(b) * f64::from(v)
+        let at = 3 * (qi + side * qj);
+        let mut w = [[0.0; 3]; 3];
+        for (b, &sb) in sign.iter().enumerate() {
+            let col = &self.columns[(3 * k + b) * face * 3 + at..][..3];
+            for (a, &sa) in sign.iter().enumerate() {
+                w[a][b] = sa * sb * f64::from(col[a]);
+            }
+        }
+        w
     }
 
     /// The force of the face on a rigid frictionless sphere (`centre`, `radius`, metres) held
@@ -276,14 +285,10 @@ impl SurfaceCompliance {
 
     /// `nq . W(q <- p) np`.
     fn normal_normal(&self, p: usize, np: [f64; 3], q: usize, nq: [f64; 3]) -> f64 {
+        let w = self.block(p, q);
         let mut v = 0.0;
-        for b in 0..3 {
-            if np[b] == 0.0 {
-                continue;
-            }
-            for a in 0..3 {
-                v += nq[a] * np[b] * self.entry(p, b, q, a);
-            }
+        for a in 0..3 {
+            v += nq[a] * (w[a][0] * np[0] + w[a][1] * np[1] + w[a][2] * np[2]);
         }
         v
     }

@@ -2,7 +2,7 @@
 //! ([`crate::response::surface_compliance`]): the rigid sphere against a fine grid of the top
 //! face, whatever model shows the tissue. The contact forces are carried to the running model's
 //! top-face nodes (bilinear weights) as loads, so the view deforms under the force the hand
-//! feels. The compliance is computed once per material (about 25 s, 25 MB) and kept in a cache
+//! feels. The compliance is computed once per material (about a minute, 60 MB) and kept in a cache
 //! folder.
 
 use std::path::Path;

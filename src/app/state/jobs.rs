@@ -22,7 +22,7 @@ pub(super) enum ComplianceMessage {
 }
 
 impl ViewerState {
-    /// Loads (or computes, about 25 s, and keeps) the material's surface compliance in the
+    /// Loads (or computes, about a minute, and keeps) the material's surface compliance in the
     /// background; the probe uses the model's surface nodes until it is ready.
     pub(super) fn start_compliance(&mut self) {
         if self.compliance.busy() {

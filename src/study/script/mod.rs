@@ -17,7 +17,7 @@
 //!     { "wait":    { "duration_s": 0.5 } } ] }
 //! ```
 //! `contact` is `surface` (default, the viewer's: the probe's force comes from the material's
-//! surface compliance on a 2.5 mm grid of the top face, [`crate::sim::surface_probe`], computed
+//! surface compliance on a 2 mm grid of the top face, [`crate::sim::surface_probe`], computed
 //! once per material and kept in the cache folder) or `nodes` (the running model's surface nodes
 //! are projected out of the sphere). `nodes` is the grid's nodes per axis (default 8, the viewer's; 4 to [`MAX_SCRIPT_NODES`]): a
 //! lattice takes its shipped 8^3 tissue carried to that grid
