@@ -91,7 +91,7 @@ fn explicit_and_implicit_steps_do_not_allocate() {
     // sphere moving every step: a contact solve each step, in preallocated memory.
     let material = tissue_sim::mechanics::material::Material::object_a();
     let compliance =
-        tissue_sim::response::surface_compliance::SurfaceCompliance::compute(&material, 10, &mut |_| {}).expect("c");
+        tissue_sim::response::surface_compliance::SurfaceCompliance::compute(&material, 10, &mut |_| true).expect("c");
     let probe = tissue_sim::sim::surface_probe::SurfaceProbe::new(std::sync::Arc::new(compliance), grid);
     sim.set_surface_probe(Some(probe));
     let at = |i: usize| Tool::Probe { centre: [0.03 + 2e-4 * i as f64, 0.05, 0.1 + 0.015 - 0.004], radius: 0.015 };

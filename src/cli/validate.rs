@@ -123,6 +123,7 @@ fn against_material(
     let mut model_force: Box<dyn FnMut(&continuum::Press) -> anyhow::Result<f64>> = if contact == "surface" {
         let compliance = crate::sim::surface_probe::load_or_compute(material, dir.as_deref(), &mut |f| {
             eprintln!("the material's surface compliance: {:.0} %, {:.0} s", 100.0 * f, start.elapsed().as_secs_f64());
+            true
         })?;
         let mut scratch = crate::response::surface_compliance::ContactScratch::default();
         Box::new(move |press| {

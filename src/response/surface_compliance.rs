@@ -59,6 +59,9 @@ pub enum ComplianceError {
     /// A kept file does not match.
     #[error("surface compliance file: {0}")]
     File(String),
+    /// The computation was stopped by its caller.
+    #[error("the surface compliance was cancelled")]
+    Cancelled,
 }
 
 impl SurfaceCompliance {
@@ -83,11 +86,12 @@ impl SurfaceCompliance {
     }
 
     /// Computes the compliance of `material` with `divisions` face divisions per axis (even);
-    /// `progress(fraction)` is called between batches.
+    /// `progress(fraction)` is called between batches (about a second apart) and stops the work
+    /// when it returns `false`.
     pub fn compute(
         material: &Material,
         divisions: usize,
-        progress: &mut dyn FnMut(f64),
+        progress: &mut dyn FnMut(f64) -> bool,
     ) -> Result<Self, ComplianceError> {
         let c = &material.stiffness;
         let coupled = (0..3).any(|i| (3..6).any(|j| c[(i, j)] != 0.0))
@@ -103,7 +107,13 @@ impl SurfaceCompliance {
         let z = graded_axis(l, l, s, FINE_DEPTH_M, GROWTH);
         let mesh = GradedMesh { axes: [xy.clone(), xy, z] };
         let top = mesh.dims()[2] - 1;
+        if !progress(0.0) {
+            return Err(ComplianceError::Cancelled);
+        }
         let mut fem = GradedFem::clamped_bottom(mesh, material)?;
+        if !progress(0.0) {
+            return Err(ComplianceError::Cancelled);
+        }
         let side = divisions + 1;
         let half = divisions / 2 + 1;
         let n = fem.fixed.len();
@@ -135,7 +145,9 @@ impl SurfaceCompliance {
                 }
             }
             done += batch.len();
-            progress(done as f64 / quadrant.len() as f64);
+            if !progress(done as f64 / quadrant.len() as f64) {
+                return Err(ComplianceError::Cancelled);
+            }
         }
         Ok(Self { divisions, columns })
     }

@@ -97,11 +97,12 @@ pub fn file_name(material: &Material) -> String {
 }
 
 /// `material`'s surface compliance: read from `dir` where kept there, else computed
-/// (`progress(fraction)`) and written there (atomically) when a folder is given.
+/// (`progress(fraction)`, which stops the work by returning `false`) and written there
+/// (atomically) when a folder is given.
 pub fn load_or_compute(
     material: &Material,
     dir: Option<&Path>,
-    progress: &mut dyn FnMut(f64),
+    progress: &mut dyn FnMut(f64) -> bool,
 ) -> anyhow::Result<Arc<SurfaceCompliance>> {
     let path = dir.map(|d| d.join(file_name(material)));
     if let Some(path) = &path

@@ -111,7 +111,7 @@ fn dynamic_references(
 /// the material, percent, and its time per 1 ms tick with the probe sliding (one contact solve).
 fn surface_probe_figures(material: &Material, kept: &mut ContinuumCache) -> anyhow::Result<ProbeFigures> {
     let compliance =
-        crate::sim::surface_probe::load_or_compute(material, crate::io::cache_dir().as_deref(), &mut |_| {})?;
+        crate::sim::surface_probe::load_or_compute(material, crate::io::cache_dir().as_deref(), &mut |_| true)?;
     let mut scratch = ContactScratch::default();
     let worst = worst_validation_error(material, kept, &mut |press| {
         let f = compliance.press(press.centre(), press.radius, &mut scratch)?;

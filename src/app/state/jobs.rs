@@ -26,6 +26,8 @@ impl ViewerState {
     /// background; the probe uses the model's surface nodes until it is ready.
     pub(super) fn start_compliance(&mut self) {
         if self.compliance.busy() {
+            // Another material's: stopped within a batch, then this one starts.
+            self.compliance.cancel();
             self.compliance_stale = true;
             return;
         }
@@ -37,8 +39,10 @@ impl ViewerState {
             move || wake(),
             move |ctx| {
                 let dir = crate::io::cache_dir();
+                // Stopped within a batch when the viewer closes or the material changes.
                 let r = crate::sim::surface_probe::load_or_compute(&material, dir.as_deref(), &mut |f| {
                     ctx.send(ComplianceMessage::Progress(f));
+                    !ctx.cancelled()
                 });
                 ctx.send(ComplianceMessage::Done(r.map_err(|e| format!("{e:#}"))));
             },

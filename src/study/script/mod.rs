@@ -306,7 +306,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     let probes = script.actions.iter().any(|a| matches!(a, Action::Probe { .. } | Action::ProbePath { .. }));
     if script.contact == Contact::Surface && probes {
         let compliance =
-            crate::sim::surface_probe::load_or_compute(&material, crate::io::cache_dir().as_deref(), &mut |_| {})
+            crate::sim::surface_probe::load_or_compute(&material, crate::io::cache_dir().as_deref(), &mut |_| true)
                 .map_err(|e| anyhow::anyhow!("script: the probe's surface compliance: {e:#}"))?;
         sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::new(compliance, grid)));
     }
