@@ -126,10 +126,7 @@ fn against_material(
             true
         })?;
         let mut scratch = crate::response::surface_compliance::ContactScratch::default();
-        Box::new(move |press| {
-            let f = compliance.press(press.centre(), press.radius, &mut scratch)?;
-            Ok(-glam::DVec3::from(f).dot(glam::DVec3::from(press.direction())))
-        })
+        Box::new(move |press| probe_score::compliance_force_n(&compliance, &mut scratch, press))
     } else {
         Box::new(move |press| probe_score::responder_force_n(&mut responder, press))
     };

@@ -12,6 +12,16 @@ pub use pending::remove_pending;
 pub use read::{MAX_INPUT_BYTES, read_bytes, read_json, read_text};
 pub use write::{MAX_OUTPUT_BYTES, OutputDir, check_output, write_atomic, write_json_atomic, write_json_compact};
 
+/// A stable key of `salt` and `values` (their bits, FxHash) for a file kept in the cache folder:
+/// the same inputs give the same name on every run and machine.
+pub fn cache_key<'a>(salt: impl std::hash::Hash, values: impl IntoIterator<Item = &'a f64>) -> u64 {
+    use std::hash::{Hash as _, Hasher as _};
+    let mut hasher = rustc_hash::FxHasher::default();
+    salt.hash(&mut hasher);
+    values.into_iter().for_each(|v| v.to_bits().hash(&mut hasher));
+    hasher.finish()
+}
+
 /// The default cache folder: `$XDG_CACHE_HOME/tissue-sim`, else `$HOME/.cache/tissue-sim`.
 pub fn cache_dir() -> Option<std::path::PathBuf> {
     let from = |v: &str| std::env::var_os(v).filter(|s| !s.is_empty()).map(std::path::PathBuf::from);

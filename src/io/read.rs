@@ -2,11 +2,11 @@
 
 use std::path::Path;
 
+use anyhow::Context as _;
 use serde::Deserialize;
 
 /// Reads a JSON file (at most [`MAX_INPUT_BYTES`]).
 pub fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> anyhow::Result<T> {
-    use anyhow::Context as _;
     let text = read_text(path)?;
     serde_json::from_str(&text).with_context(|| format!("invalid JSON in {}", path.display()))
 }
@@ -16,34 +16,43 @@ pub const MAX_INPUT_BYTES: u64 = 16 << 20;
 
 /// Reads a text file of at most [`MAX_INPUT_BYTES`].
 pub fn read_text(path: &Path) -> anyhow::Result<String> {
-    use anyhow::{Context as _, bail};
     use std::io::Read as _;
-    let f = std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
-    if f.metadata().is_ok_and(|m| m.is_dir()) {
-        bail!("cannot read {}: it is a directory", path.display());
-    }
     let mut text = String::new();
-    f.take(MAX_INPUT_BYTES + 1).read_to_string(&mut text).with_context(|| format!("cannot read {}", path.display()))?;
-    if text.len() as u64 > MAX_INPUT_BYTES {
-        bail!("{} is larger than the input bound of {} MB", path.display(), MAX_INPUT_BYTES >> 20);
-    }
+    open_bounded(path, MAX_INPUT_BYTES)?.read_to_string(&mut text).with_context(|| cannot_read(path))?;
+    check_len(path, text.len(), MAX_INPUT_BYTES, "the input bound")?;
     Ok(text)
 }
 
 /// Reads a binary file of at most `max` bytes (a cache file the program wrote).
 pub fn read_bytes(path: &Path, max: u64) -> anyhow::Result<Vec<u8>> {
-    use anyhow::{Context as _, bail};
     use std::io::Read as _;
-    let f = std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
-    if f.metadata().is_ok_and(|m| m.is_dir()) {
-        bail!("cannot read {}: it is a directory", path.display());
-    }
     let mut bytes = Vec::new();
-    f.take(max + 1).read_to_end(&mut bytes).with_context(|| format!("cannot read {}", path.display()))?;
-    if bytes.len() as u64 > max {
-        bail!("{} is larger than the bound of {} MB", path.display(), max >> 20);
-    }
+    open_bounded(path, max)?.read_to_end(&mut bytes).with_context(|| cannot_read(path))?;
+    check_len(path, bytes.len(), max, "the bound")?;
     Ok(bytes)
+}
+
+fn cannot_read(path: &Path) -> String {
+    format!("cannot read {}", path.display())
+}
+
+/// The one bounded opening: a file (a directory refused by name), read to at most `max + 1`
+/// bytes so that a longer one is seen.
+fn open_bounded(path: &Path, max: u64) -> anyhow::Result<std::io::Take<std::fs::File>> {
+    use std::io::Read as _;
+    let f = std::fs::File::open(path).with_context(|| cannot_read(path))?;
+    if f.metadata().is_ok_and(|m| m.is_dir()) {
+        anyhow::bail!("cannot read {}: it is a directory", path.display());
+    }
+    Ok(f.take(max + 1))
+}
+
+/// Refuses what was read beyond `max` bytes, naming the `bound`.
+fn check_len(path: &Path, len: usize, max: u64, bound: &str) -> anyhow::Result<()> {
+    if len as u64 > max {
+        anyhow::bail!("{} is larger than {bound} of {} MB", path.display(), max >> 20);
+    }
+    Ok(())
 }
 
 #[cfg(all(test, unix))]

@@ -158,12 +158,6 @@ impl SurfaceCompliance {
         [(q % self.side()) as f64 * s, (q / self.side()) as f64 * s, CUBE_SIDE_M]
     }
 
-    /// Displacement component `a` of face node `q` under a unit force along `b` at face node `p`,
-    /// metres per newton.
-    pub fn entry(&self, p: usize, b: usize, q: usize, a: usize) -> f64 {
-        self.block(p, q)[a][b]
-    }
-
     /// The 3 x 3 block `W[a][b]`: displacement `a` of face node `q` under a unit force `b` at
     /// face node `p`, metres per newton.
     pub fn block(&self, p: usize, q: usize) -> [[f64; 3]; 3] {

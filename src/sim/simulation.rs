@@ -383,7 +383,7 @@ impl Simulation {
             self.tool_force = f.map(|v| -v);
         }
         if let (Tool::Probe { centre, radius }, Some(probe)) = (self.tool, self.surface_probe.as_mut())
-            && super::surface_probe::SurfaceProbe::covers(centre, radius)
+            && super::surface_probe::SurfaceProbe::covers(centre)
             && let Ok(force) = probe.update(centre, radius)
         {
             for &(node, f) in probe.loads() {

@@ -76,9 +76,9 @@ impl SurfaceProbe {
         &self.loads
     }
 
-    /// Whether the sphere can touch the top face only (the face the compliance covers): its
-    /// lowest point is above the bottom and its centre over the face.
-    pub fn covers(centre: [f64; 3], _radius: f64) -> bool {
+    /// Whether a sphere centred at `centre` presses the top face (the face the compliance
+    /// covers): its centre is over the face and in the cube's upper half.
+    pub fn covers(centre: [f64; 3]) -> bool {
         (0.0..=CUBE_SIDE_M).contains(&centre[0])
             && (0.0..=CUBE_SIDE_M).contains(&centre[1])
             && centre[2] > CUBE_SIDE_M * 0.5
@@ -87,13 +87,10 @@ impl SurfaceProbe {
 
 /// The file name of `material`'s surface compliance in a cache folder.
 pub fn file_name(material: &Material) -> String {
-    use std::hash::{Hash, Hasher};
-    let mut hasher = rustc_hash::FxHasher::default();
-    (1u32, DEFAULT_DIVISIONS).hash(&mut hasher);
-    for v in material.stiffness.iter() {
-        v.to_bits().hash(&mut hasher);
-    }
-    format!("surface-compliance-{:016x}.bin", hasher.finish())
+    format!(
+        "surface-compliance-{:016x}.bin",
+        crate::io::cache_key((1u32, DEFAULT_DIVISIONS), material.stiffness.iter())
+    )
 }
 
 /// `material`'s surface compliance: read from `dir` where kept there, else computed

@@ -114,8 +114,7 @@ fn surface_probe_figures(material: &Material, kept: &mut ContinuumCache) -> anyh
         crate::sim::surface_probe::load_or_compute(material, crate::io::cache_dir().as_deref(), &mut |_| true)?;
     let mut scratch = ContactScratch::default();
     let worst = worst_validation_error(material, kept, &mut |press| {
-        let f = compliance.press(press.centre(), press.radius, &mut scratch)?;
-        Ok(-glam::DVec3::from(f).dot(glam::DVec3::from(press.direction())))
+        crate::validate::probe_score::compliance_force_n(&compliance, &mut scratch, press)
     })?;
     // The 15 mm sphere 4 mm deep sliding along x at 40 mm/s.
     let (r, z) = (0.015, crate::mechanics::grid::CUBE_SIDE_M + 0.015 - 0.004);

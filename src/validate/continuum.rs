@@ -83,6 +83,12 @@ impl Press {
     pub fn direction(&self) -> [f64; 3] {
         free_face_normal(self.at).unwrap_or([0.0, 0.0, 1.0]).map(|c| -c)
     }
+
+    /// The component of the tissue's `force` on the sphere against the pressing direction,
+    /// newtons: what pushes back.
+    pub fn force_along(&self, force: [f64; 3]) -> f64 {
+        -DVec3::from(force).dot(DVec3::from(self.direction()))
+    }
 }
 
 /// The material's force on one press.
@@ -237,7 +243,7 @@ pub fn press_force(
         progress(fine);
         let mut solve = PointSolve::new(material, press, fine)?;
         let (force, contacts) = solve.press(press)?;
-        let force_n = -DVec3::from(force).dot(DVec3::from(press.direction()));
+        let force_n = press.force_along(force);
         if let Some(&(_, last)) = out.levels.last() {
             out.change = (force_n - last).abs() / force_n.abs().max(last.abs()).max(f64::MIN_POSITIVE);
         }

@@ -43,6 +43,8 @@ pub struct Entry {
 #[derive(Debug)]
 pub struct ContinuumCache {
     dir: Option<PathBuf>,
+    /// The file's name in `dir`.
+    name: String,
     file: CacheFile,
     dirty: bool,
 }
@@ -53,17 +55,7 @@ fn stiffness_key(material: &Material) -> Vec<f64> {
 
 /// The file name of `material`'s answers: a hash of its stiffness and the method's version.
 pub fn file_name(material: &Material) -> String {
-    key_name(&stiffness_key(material))
-}
-
-fn key_name(stiffness: &[f64]) -> String {
-    use std::hash::{Hash, Hasher};
-    let mut hasher = rustc_hash::FxHasher::default();
-    VERSION.hash(&mut hasher);
-    for v in stiffness {
-        v.to_bits().hash(&mut hasher);
-    }
-    format!("continuum-{:016x}.json", hasher.finish())
+    format!("continuum-{:016x}.json", crate::io::cache_key(VERSION, material.stiffness.iter()))
 }
 
 impl ContinuumCache {
@@ -92,7 +84,7 @@ impl ContinuumCache {
                 }
             }
         }
-        Self { dir: dir.map(Path::to_path_buf), file, dirty: false }
+        Self { dir: dir.map(Path::to_path_buf), name: file_name(material), file, dirty: false }
     }
 
     /// The kept answer to `press` at `tolerance` or tighter, if any.
@@ -126,7 +118,7 @@ impl ContinuumCache {
         }
         std::fs::create_dir_all(dir)
             .map_err(|e| anyhow::anyhow!("cannot create the cache folder {}: {e}", dir.display()))?;
-        crate::io::write_json_atomic(&dir.join(key_name(&self.file.stiffness)), &self.file)?;
+        crate::io::write_json_atomic(&dir.join(&self.name), &self.file)?;
         self.dirty = false;
         Ok(())
     }

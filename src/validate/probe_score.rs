@@ -2,8 +2,6 @@
 //! presses ([`crate::validate::presses`]), with the same-mesh FEM beside it ("against its own
 //! mesh"): the `material` part of `validate`.
 
-use glam::DVec3;
-
 use crate::mechanics::material::Material;
 use crate::validate::continuum::Press;
 use crate::validate::continuum_cache::ContinuumCache;
@@ -56,8 +54,16 @@ pub struct MaterialReport {
 
 /// The force along the press's direction of a responder's node contact.
 pub fn responder_force_n(responder: &mut Responder, press: &Press) -> anyhow::Result<f64> {
-    let force = responder.press(press.centre(), press.radius)?;
-    Ok(-DVec3::from(force).dot(DVec3::from(press.direction())))
+    Ok(press.force_along(responder.press(press.centre(), press.radius)?))
+}
+
+/// The force along the press's direction with the material's surface compliance as contact.
+pub fn compliance_force_n(
+    compliance: &crate::response::surface_compliance::SurfaceCompliance,
+    scratch: &mut crate::response::surface_compliance::ContactScratch,
+    press: &Press,
+) -> anyhow::Result<f64> {
+    Ok(press.force_along(compliance.press(press.centre(), press.radius, scratch)?))
 }
 
 /// Scores a model's probe (`model_force(press)`, newtons along the press, touching as
