@@ -87,12 +87,18 @@ fn explicit_and_implicit_steps_do_not_allocate() {
     }
     let simulated = ALLOCATIONS.load(Ordering::Relaxed) - before;
     assert_eq!(simulated, 0, "allocations in 600 simulation steps with drag, probe and no tool");
-    // The probe on the material's surface compliance (a coarse one here: 10 divisions), the
-    // sphere moving every step: a contact solve each step, in preallocated memory.
+    // The probe on the material's surface compliance (a coarse one here: 10 divisions) with the
+    // material's slow modes, the sphere moving every step: a few contact solves each step (the
+    // lag's fixed point) and the modes advanced, in preallocated memory.
     let material = tissue_sim::mechanics::material::Material::object_a();
     let compliance =
         tissue_sim::response::surface_compliance::SurfaceCompliance::compute(&material, 10, &mut |_| true).expect("c");
-    let probe = tissue_sim::sim::surface_probe::SurfaceProbe::new(std::sync::Arc::new(compliance), grid);
+    let surface = tissue_sim::sim::surface_probe::MaterialSurface {
+        compliance: std::sync::Arc::new(compliance),
+        modes: std::sync::Arc::new(tissue_sim::sim::modal_lag::ModalBasis::of_material(&material).expect("modes")),
+    };
+    let probe = tissue_sim::sim::surface_probe::SurfaceProbe::on(&surface, grid, Some(0.2));
+    assert!(probe.is_dynamic());
     sim.set_surface_probe(Some(probe));
     let at = |i: usize| Tool::Probe { centre: [0.03 + 2e-4 * i as f64, 0.05, 0.1 + 0.015 - 0.004], radius: 0.015 };
     for i in 0..5 {

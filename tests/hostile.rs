@@ -156,7 +156,7 @@ fn a_signal_leaves_nothing_behind() {
     let out = dir.path().join("cal.json");
     for signal in ["INT", "TERM"] {
         let child = bin()
-            .args(["calibrate", "--object", "A", "--generations", "1000", "--out", s(&out)])
+            .args(["calibrate", "--object", "A", "--generations", "40000", "--out", s(&out)])
             .stderr(Stdio::null())
             .spawn()
             .expect("spawn");

@@ -23,6 +23,8 @@ pub struct Job {
     pub material: Material,
     /// The lattice.
     pub topology: Topology,
+    /// The grid (the viewer's resolution).
+    pub grid: Grid,
     /// The training cases.
     pub cases: CaseSet,
     /// Search settings.
@@ -31,9 +33,8 @@ pub struct Job {
 
 /// Starts `job` in `slot` (refused while one runs); `wake` repaints the UI after each message.
 pub fn start(slot: &mut Slot<Progress>, job: Job, wake: impl Fn() + Send + Sync + 'static) -> Result<(), StartError> {
-    let Job { material, topology, cases, settings } = job;
+    let Job { material, topology, grid, cases, settings } = job;
     slot.start("calibration", wake, move |ctx| {
-        let grid = Grid::paper();
         let space = GeneSpace::new(&material, &grid, topology);
         let problem = Problem::new(material, grid, topology).and_then(|p| p.with_cases(cases));
         let result = problem.map_err(|e| e.to_string()).and_then(|problem| {

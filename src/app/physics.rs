@@ -56,7 +56,7 @@ pub enum Command {
     Replace(Replacement),
     /// The probe's contact: the material's surface compliance (`Some`, kept across
     /// replacements of the same material) or the model's surface nodes (`None`).
-    SetSurfaceProbe(Option<Arc<crate::response::surface_compliance::SurfaceCompliance>>),
+    SetSurfaceProbe(Option<crate::sim::surface_probe::MaterialSurface>),
 }
 
 /// How fast the physics runs, over the last wall-clock second.
@@ -206,7 +206,7 @@ struct Loop {
     paused: bool,
     owed: f64,
     /// The material's surface compliance for the probe, when the viewer has one.
-    compliance: Option<Arc<crate::response::surface_compliance::SurfaceCompliance>>,
+    compliance: Option<crate::sim::surface_probe::MaterialSurface>,
     /// The probe gliding to the last mouse sample.
     glide: Option<Glide>,
     /// When the last tool command came.
@@ -242,7 +242,7 @@ impl Loop {
         let probe = self
             .compliance
             .as_ref()
-            .map(|c| crate::sim::surface_probe::SurfaceProbe::new(Arc::clone(c), sim.tissue.grid()));
+            .map(|c| crate::sim::surface_probe::SurfaceProbe::on(c, sim.tissue.grid(), sim.tissue.damping().ratio()));
         sim.set_surface_probe(probe);
     }
 }

@@ -55,6 +55,8 @@ pub struct ViewSettings {
     pub calib_population: usize,
     /// Training cases of the calibration.
     pub calib_cases: CaseSet,
+    /// Nodes per edge of the model's grid (the resolution).
+    pub nodes: usize,
 }
 
 impl Default for ViewSettings {
@@ -75,6 +77,7 @@ impl Default for ViewSettings {
             calib_generations: 100,
             calib_population: 50,
             calib_cases: CaseSet::Touch,
+            nodes: crate::mechanics::grid::Grid::paper().n(),
         }
     }
 }

@@ -174,6 +174,7 @@ impl Surface {
             encode_srgb: !self.config.format.is_srgb(),
             ..Default::default()
         };
+        self.cube.fit(&self.device, cube.mesh, cube.lines.len());
         self.cube.prepare(&self.queue, (cube.view_proj)(vw / vh), style, cube.mesh, cube.lines);
         let mut encoder = self.device.create_command_encoder(&Default::default());
         self.egui_renderer.update_buffers(&self.device, &self.queue, &mut encoder, &egui.jobs, &screen);

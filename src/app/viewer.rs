@@ -132,6 +132,7 @@ impl App {
                         latency: self.stats.latency_shown,
                         physics_stopped: self.physics_stopped.as_deref(),
                         rest: self.overlay.rest(),
+                        grid: self.state.grid(),
                     };
                     let s = &mut self.state;
                     panel::show(
@@ -218,7 +219,13 @@ impl App {
     }
 
     fn draw(&mut self, full: egui::FullOutput) -> anyhow::Result<()> {
-        let n = self.state.grid().num_nodes();
+        let grid = self.state.grid();
+        let n = grid.num_nodes();
+        if self.overlay.rest().len() != n {
+            // Another resolution: the surface and overlays of the new grid.
+            self.mesh = SurfaceMesh::new(&grid);
+            self.overlay = Overlay::new(&grid);
+        }
         if self.latest.positions.len() != n {
             self.latest.positions.clear();
             self.latest.positions.extend_from_slice(self.overlay.rest());

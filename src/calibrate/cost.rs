@@ -60,6 +60,9 @@ pub struct Problem {
     pub case_set: super::CaseSet,
     /// The touch benchmark's FEM answers, when the objective uses them.
     pub touch: Option<std::sync::Arc<crate::validate::touch_score::Reference>>,
+    /// The continuum's training presses and the material's force on each (newtons), when the
+    /// objective uses them.
+    pub presses: Option<std::sync::Arc<Vec<(crate::validate::continuum::Press, f64)>>>,
     /// The paper cost of a zero displacement (the sum of the FEM's nodal displacement norms),
     /// metres: the scale that makes the paper's cost relative in the combined objective.
     paper_scale: f64,
@@ -129,6 +132,7 @@ impl Problem {
             axial,
             case_set: super::CaseSet::Paper,
             touch: None,
+            presses: None,
             paper_scale,
         })
     }
@@ -173,7 +177,16 @@ impl Problem {
     /// This problem using `set` as its training cases (the touch benchmark's FEM answers are
     /// computed here when it needs them).
     pub fn with_cases(mut self, set: super::CaseSet) -> Result<Self, CostError> {
-        if set != super::CaseSet::Paper {
+        if set == super::CaseSet::Presses {
+            if self.topology == Topology::Axis {
+                return Err(CostError::Touch(
+                    "the axis-spring lattice has no shear stiffness at rest, so the presses cannot train it".into(),
+                ));
+            }
+            let forces = crate::validate::probe_score::training_forces(&self.material)
+                .map_err(|e| CostError::Touch(format!("the material's presses: {e:#}")))?;
+            self.presses = Some(std::sync::Arc::new(forces));
+        } else if set != super::CaseSet::Paper {
             if self.topology == Topology::Axis {
                 return Err(CostError::Touch(
                     "the axis-spring lattice has no shear stiffness at rest, so the touch cases cannot train it".into(),
@@ -193,7 +206,9 @@ impl Problem {
     pub fn objective(&self, params: &MsmParams, ws: &mut Workspace) -> Result<f64, CostError> {
         match self.case_set {
             super::CaseSet::Paper => self.cost(params, ws),
-            super::CaseSet::Touch | super::CaseSet::Both => Ok(self.objective_gradient(params, ws)?.0),
+            super::CaseSet::Touch | super::CaseSet::Both | super::CaseSet::Presses => {
+                Ok(self.objective_gradient(params, ws)?.0)
+            }
         }
     }
 
@@ -271,9 +286,27 @@ impl Problem {
             grad.copy_from_slice(&g);
             Ok((cost, grad))
         };
+        let presses = |ws: &mut Workspace| -> Result<(f64, [f64; 7]), CostError> {
+            params.validate()?;
+            let presses = self.presses.as_deref().ok_or_else(|| CostError::Touch("no presses".into()))?;
+            let responder = match &mut ws.touch {
+                Some(r) => r,
+                empty => empty.insert(crate::validate::touch_score::Responder::new(
+                    self.grid,
+                    crate::response::linear::GroupedStiffness::lattice(self.grid, self.topology),
+                    &[1.0; 7],
+                )?),
+            };
+            let theta = crate::response::linear::group_values(params);
+            let (cost, g) = crate::calibrate::fit::press_cost(presses, self.grid, responder, &theta)?;
+            let mut grad = [0.0; 7];
+            grad.copy_from_slice(&g);
+            Ok((cost, grad))
+        };
         match self.case_set {
             super::CaseSet::Paper => self.paper_gradient(params, ws),
             super::CaseSet::Touch => touch(ws),
+            super::CaseSet::Presses => presses(ws),
             super::CaseSet::Both => {
                 let (t, tg) = touch(ws)?;
                 let (p, pg) = self.paper_gradient(params, ws)?;

@@ -14,6 +14,7 @@
 //! the FEM's in the Frobenius norm, solved exactly over the few parameters.
 
 use crate::mechanics::fem::FemModel;
+use crate::mechanics::grid::Grid;
 use crate::mechanics::msm::{MsmParams, Topology};
 use crate::response::linear::{GroupedStiffness, with_group_values};
 use crate::validate::touch::Set;
@@ -110,6 +111,33 @@ pub fn touch_cost(
         }
     }
     let n = count.max(1) as f64;
+    Ok((cost / n, grad.into_iter().map(|g| g / n).collect()))
+}
+
+/// The press cost of a lattice at `theta`: the mean of `(F / F_material - 1)^2` over `presses`
+/// (each with the material's force, newtons), `F` the magnitude of the lattice's force with node
+/// contact on `grid`, and its gradient by each group (the probe's adjoint, the contact set held).
+pub fn press_cost(
+    presses: &[(crate::validate::continuum::Press, f64)],
+    grid: Grid,
+    responder: &mut Responder,
+    theta: &[f64],
+) -> Result<(f64, Vec<f64>), crate::mechanics::sparse::SparseError> {
+    let r = responder;
+    r.set_theta(theta)?;
+    let groups = r.stiffness.groups;
+    let (mut cost, mut grad) = (0.0, vec![0.0; groups]);
+    let mut forms = vec![0.0; groups];
+    for (press, material) in presses {
+        let answer = r.solver.probe(&grid, press.centre(), press.radius)?;
+        let ratio = answer.force_n() / material;
+        cost += (ratio - 1.0).powi(2);
+        r.stiffness.group_forms(&answer.sensitivity, &answer.u, &mut forms);
+        for g in 0..groups {
+            grad[g] -= 2.0 * (ratio - 1.0) * forms[g] / material;
+        }
+    }
+    let n = presses.len().max(1) as f64;
     Ok((cost / n, grad.into_iter().map(|g| g / n).collect()))
 }
 

@@ -55,6 +55,7 @@ value_enum!(CaseSet {
     Paper => "paper", "The paper's nine clamped face loads (eq. 1)";
     Touch => "touch", "The touch benchmark's training cases (point loads, top shear, probe), then an L-BFGS polish";
     Both => "both", "The touch cost plus the paper's cost relative to the FEM's displacements";
+    Presses => "presses", "The continuum's 24 training presses (the material's probe force, node contact at --nodes), then an L-BFGS polish";
 });
 value_enum!(CostMode {
     Static => "static", "Static equilibria (the paper's cost; `d` is not identified)";

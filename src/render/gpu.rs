@@ -213,6 +213,34 @@ impl CubeRenderer {
         }
     }
 
+    /// Makes the surface and line buffers fit `mesh` (another grid) and `max_line_vertices`,
+    /// creating them again where they do not.
+    pub fn fit(&mut self, device: &wgpu::Device, mesh: &SurfaceMesh, max_line_vertices: usize) {
+        let vertex_bytes = std::mem::size_of_val(mesh.vertices.as_slice()) as u64;
+        if vertex_bytes != self.vertices.size() || mesh.indices.len() as u32 != self.index_count {
+            self.vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("surface vertices"),
+                contents: bytemuck::cast_slice(&mesh.vertices),
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            });
+            self.indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("surface indices"),
+                contents: bytemuck::cast_slice(&mesh.indices),
+                usage: wgpu::BufferUsages::INDEX,
+            });
+            self.index_count = mesh.indices.len() as u32;
+        }
+        if max_line_vertices as u64 > self.line_capacity {
+            self.line_capacity = max_line_vertices as u64;
+            self.lines = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("line vertices"),
+                size: self.line_capacity * std::mem::size_of::<LineVertex>() as u64,
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+        }
+    }
+
     /// Uploads this frame's camera, surface and overlays (overlays beyond capacity are dropped).
     pub fn prepare(
         &mut self,

@@ -92,6 +92,9 @@ fn fem_dt_limit(model: &FemModel, density: f64, alpha: f64) -> f64 {
 }
 
 impl Tissue for FemTissue {
+    fn modal(&self) -> Result<crate::response::modal::ModalModel, String> {
+        Ok(crate::response::modal::ModalModel::fem(&self.dynamics.model, self.density))
+    }
     fn grid(&self) -> Grid {
         self.dynamics.model.grid
     }

@@ -13,6 +13,7 @@
 
 pub mod fem_tissue;
 pub mod integrator;
+pub mod modal_lag;
 pub mod model;
 pub mod msm_tissue;
 pub mod shipped;

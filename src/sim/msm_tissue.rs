@@ -51,6 +51,9 @@ impl MsmTissue {
 }
 
 impl Tissue for MsmTissue {
+    fn modal(&self) -> Result<crate::response::modal::ModalModel, String> {
+        crate::response::modal::ModalModel::lattice(&self.model)
+    }
     fn grid(&self) -> Grid {
         self.model.grid
     }

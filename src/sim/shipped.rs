@@ -56,6 +56,9 @@ pub enum CaseSet {
     Touch,
     /// Both: the touch cost plus the paper's cost relative to the FEM's displacements.
     Both,
+    /// The continuum's training presses: the material's probe force (`validate`'s 24 training
+    /// presses), the model's node contact at its resolution.
+    Presses,
 }
 
 impl CaseSet {
@@ -65,6 +68,7 @@ impl CaseSet {
             CaseSet::Paper => "paper",
             CaseSet::Touch => "touch",
             CaseSet::Both => "both",
+            CaseSet::Presses => "presses",
         }
     }
 }

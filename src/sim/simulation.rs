@@ -180,6 +180,9 @@ impl Simulation {
     /// again (what it says, if anything).
     pub fn set_damping_ratio(&mut self, zeta: f64) -> Result<Option<String>, String> {
         self.tissue.set_damping_ratio(zeta)?;
+        if let Some(probe) = &mut self.surface_probe {
+            probe.set_damping_ratio(zeta);
+        }
         Ok(self.set_integrator(self.requested, self.requested_dt))
     }
 
@@ -213,6 +216,9 @@ impl Simulation {
             x[c].copy_from_slice(&self.rest[c]);
             v[c].fill(0.0);
         }
+        if let Some(probe) = &mut self.surface_probe {
+            probe.reset();
+        }
         self.time_s = 0.0;
         self.good_time = None;
     }
@@ -221,6 +227,9 @@ impl Simulation {
     pub fn step(&mut self) -> Result<(), BlowUp> {
         self.apply_tool_load();
         let stepped = self.tissue.step(self.integrator, self.dt);
+        if let Some(probe) = &mut self.surface_probe {
+            probe.advance(self.dt);
+        }
         self.enforce_contact();
         self.time_s += self.dt;
         let unhealthy = if stepped.is_ok() { self.unhealthy() } else { None };
@@ -314,6 +323,9 @@ impl Simulation {
             }
             None => self.back_to_rest(),
         }
+        if let Some(probe) = &mut self.surface_probe {
+            probe.reset();
+        }
         self.tool = Tool::None;
         self.tool_force = [0.0; 3];
     }
@@ -393,6 +405,8 @@ impl Simulation {
             }
             self.tool_force = force;
             self.probe_on_surface = true;
+        } else if let Some(probe) = self.surface_probe.as_mut() {
+            probe.release();
         }
     }
 

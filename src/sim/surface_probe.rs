@@ -4,15 +4,27 @@
 //! top-face nodes (bilinear weights) as loads, so the view deforms under the force the hand
 //! feels. The compliance is computed once per material (about a minute, 60 MB) and kept in a cache
 //! folder.
+//!
+//! With the material's lowest modes ([`ModalLag`]) the force is dynamic: the sphere meets the
+//! surface where the static answer puts it plus the lag of the slow modes behind their static
+//! values, found by a relaxed fixed point within the step (at most [`MAX_LAG_ITERATIONS`]
+//! presses, from the last step's lag), and the modes are then advanced over the step under the
+//! contact's forces.
 
 use std::path::Path;
 use std::sync::Arc;
 
+use super::modal_lag::{ModalBasis, ModalLag};
 use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
 use crate::response::surface_compliance::{
     ComplianceError, ContactScratch, DEFAULT_DIVISIONS, MAX_CONTACT_NODES, SurfaceCompliance,
 };
+
+/// Presses per step at most while finding the lag's fixed point.
+pub const MAX_LAG_ITERATIONS: usize = 6;
+/// The fixed point is reached when the lag moves by less than this, metres.
+const LAG_TOLERANCE_M: f64 = 1e-6;
 
 /// Largest compliance file read back, bytes.
 const MAX_FILE_BYTES: u64 = crate::io::MAX_OUTPUT_BYTES as u64;
@@ -26,6 +38,11 @@ pub struct SurfaceProbe {
     last: Option<([f64; 3], f64)>,
     force: [f64; 3],
     loads: Vec<(usize, [f64; 3])>,
+    lag: Option<ModalLag>,
+    /// The lag found at the last update, metres.
+    delta: [f64; 3],
+    /// The fixed point's relaxation, carried from step to step.
+    relaxation: f64,
 }
 
 impl SurfaceProbe {
@@ -38,16 +55,116 @@ impl SurfaceProbe {
             last: None,
             force: [0.0; 3],
             loads: Vec::with_capacity(4 * MAX_CONTACT_NODES),
+            lag: None,
+            delta: [0.0; 3],
+            relaxation: 0.5,
         }
     }
 
-    /// The force of the tissue on the sphere (`centre`, `radius`), newtons; solved again only
-    /// when the sphere moved. Allocates nothing.
+    /// The probe of a model on `grid` on `surface`, with the material's modes damped by the
+    /// ratio `zeta` at the fundamental (a force with inertia and damping), or static where `None`.
+    pub fn on(surface: &MaterialSurface, grid: Grid, zeta: Option<f64>) -> Self {
+        let mut probe = Self::new(Arc::clone(&surface.compliance), grid);
+        probe.lag = zeta.map(|z| ModalLag::new(Arc::clone(&surface.modes), z));
+        probe
+    }
+
+    /// The modes' damping ratio at the fundamental, from now on.
+    pub fn set_damping_ratio(&mut self, zeta: f64) {
+        if let Some(lag) = &mut self.lag {
+            lag.set_damping_ratio(zeta);
+        }
+    }
+
+    /// Whether the force has the slow modes' dynamics.
+    pub fn is_dynamic(&self) -> bool {
+        self.lag.is_some()
+    }
+
+    /// Advances the slow modes by `dt` under the loads of the last update (none when the sphere
+    /// is elsewhere: call [`SurfaceProbe::release`] first).
+    pub fn advance(&mut self, dt: f64) {
+        if let Some(lag) = &mut self.lag {
+            lag.advance(dt);
+        }
+    }
+
+    /// The sphere is not on the face: no loads.
+    pub fn release(&mut self) {
+        self.loads.clear();
+        self.force = [0.0; 3];
+        self.last = None;
+        if let Some(lag) = &mut self.lag {
+            lag.set_contact(std::iter::empty());
+        }
+    }
+
+    /// Back to rest (the modes too).
+    pub fn reset(&mut self) {
+        self.release();
+        self.delta = [0.0; 3];
+        if let Some(lag) = &mut self.lag {
+            lag.reset();
+        }
+    }
+
+    /// The force of the tissue on the sphere (`centre`, `radius`), newtons; without the lag
+    /// solved again only when the sphere moved. Allocates nothing.
     pub fn update(&mut self, centre: [f64; 3], radius: f64) -> Result<[f64; 3], ComplianceError> {
-        if self.last == Some((centre, radius)) {
+        if self.lag.is_none() {
+            if self.last == Some((centre, radius)) {
+                return Ok(self.force);
+            }
+            self.last = None;
+            self.press(centre, radius)?;
+            self.last = Some((centre, radius));
             return Ok(self.force);
         }
+        // The lag `d` solves `d = g(d)`, `g` the modes' lag under the contact of the sphere
+        // moved by `-d`; Aitken-relaxed fixed point (Irons and Tuck) from the last step's `d`.
+        let (x, y) = (centre[0], centre[1]);
+        let mut d = self.delta;
+        if self.last == Some((centre, radius)) {
+            let g = self.lag.as_ref().map_or([0.0; 3], |l| l.lag(x, y));
+            if (0..3).all(|c| (g[c] - d[c]).abs() < LAG_TOLERANCE_M) {
+                return Ok(self.force);
+            }
+        }
         self.last = None;
+        let mut previous: Option<[f64; 3]> = None;
+        for _ in 0..MAX_LAG_ITERATIONS {
+            self.press(std::array::from_fn(|c| centre[c] - d[c]), radius)?;
+            let Some(lag) = self.lag.as_mut() else { break };
+            let (scratch, compliance) = (&self.scratch, &self.compliance);
+            lag.set_contact(scratch.active.iter().zip(&scratch.lambda).map(|(&w, &lambda)| {
+                let (q, normal, _) = scratch.window[w];
+                (compliance.position(q), normal.map(|c| c * lambda))
+            }));
+            let g = lag.lag(x, y);
+            let r: [f64; 3] = std::array::from_fn(|c| g[c] - d[c]);
+            if r.iter().all(|v| v.abs() < LAG_TOLERANCE_M) {
+                break;
+            }
+            if let Some(p) = previous {
+                let dr: [f64; 3] = std::array::from_fn(|c| r[c] - p[c]);
+                let den: f64 = dr.iter().map(|v| v * v).sum();
+                if den > 0.0 {
+                    let num: f64 = (0..3).map(|c| p[c] * dr[c]).sum();
+                    self.relaxation = (-self.relaxation * num / den).clamp(0.05, 1.0);
+                }
+            }
+            for c in 0..3 {
+                d[c] += self.relaxation * r[c];
+            }
+            previous = Some(r);
+        }
+        self.delta = d;
+        self.last = Some((centre, radius));
+        Ok(self.force)
+    }
+
+    /// One press at `centre` on the compliance: the force and the model's loads.
+    fn press(&mut self, centre: [f64; 3], radius: f64) -> Result<(), ComplianceError> {
         self.force = self.compliance.press(centre, radius, &mut self.scratch)?;
         self.loads.clear();
         let h = self.grid.h();
@@ -67,8 +184,7 @@ impl SurfaceProbe {
                 }
             }
         }
-        self.last = Some((centre, radius));
-        Ok(self.force)
+        Ok(())
     }
 
     /// The contact forces on the model's nodes, newtons (a node may appear more than once).
@@ -82,6 +198,28 @@ impl SurfaceProbe {
         (0.0..=CUBE_SIDE_M).contains(&centre[0])
             && (0.0..=CUBE_SIDE_M).contains(&centre[1])
             && centre[2] > CUBE_SIDE_M * 0.5
+    }
+}
+
+/// What the probe needs of a material: its surface compliance and its slow modes.
+#[derive(Debug, Clone)]
+pub struct MaterialSurface {
+    /// The top face's contact compliance.
+    pub compliance: Arc<SurfaceCompliance>,
+    /// The lowest modes.
+    pub modes: Arc<ModalBasis>,
+}
+
+impl MaterialSurface {
+    /// `material`'s: the compliance as [`load_or_compute`] finds it, and the modes (a second).
+    pub fn load_or_compute(
+        material: &Material,
+        dir: Option<&Path>,
+        progress: &mut dyn FnMut(f64) -> bool,
+    ) -> anyhow::Result<Self> {
+        let compliance = load_or_compute(material, dir, progress)?;
+        let modes = Arc::new(ModalBasis::of_material(material).map_err(anyhow::Error::msg)?);
+        Ok(Self { compliance, modes })
     }
 }
 

@@ -55,4 +55,6 @@ pub trait Tissue: Send + std::fmt::Debug {
     fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String>;
     /// How the model is damped now.
     fn damping(&self) -> Damping;
+    /// Its rest stiffness and masses (its small-displacement dynamics), or why it has none.
+    fn modal(&self) -> Result<crate::response::modal::ModalModel, String>;
 }

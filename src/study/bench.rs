@@ -63,9 +63,13 @@ fn probe_tick(
     let tissue = model.build(&material, None, crate::response::damping::DEFAULT_DAMPING_RATIO)?;
     let mut sim = Simulation::with_tissue(tissue, integrator, dt, Some(&LoadCase::bottom_clamp(&grid, "A")));
     if run != ProbeRun::NodesStill {
-        let c =
-            crate::sim::surface_probe::load_or_compute(&material, crate::io::cache_dir().as_deref(), &mut |_| true)?;
-        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::new(c, grid)));
+        let c = crate::sim::surface_probe::MaterialSurface::load_or_compute(
+            &material,
+            crate::io::cache_dir().as_deref(),
+            &mut |_| true,
+        )?;
+        let zeta = sim.tissue.damping().ratio();
+        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::on(&c, grid, zeta)));
     }
     let r = crate::validate::touch::PROBE_RADIUS_M;
     let z = crate::mechanics::grid::CUBE_SIDE_M + r - 0.004;

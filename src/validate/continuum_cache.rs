@@ -1,4 +1,5 @@
-//! The material's probe forces ([`crate::validate::continuum`]), kept: a cache folder with one
+//! The material's probe forces ([`crate::validate::continuum`]) and fast taps
+//! ([`crate::validate::continuum_tap`]), kept: a cache folder with one
 //! JSON file per material (its stiffness in the key and in the file), and the answers shipped
 //! with the program for the paper's objects (`assets/continuum/`, a few kB) so that a fresh
 //! checkout scores without the minutes the first solves take.
@@ -7,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use crate::mechanics::material::Material;
 use crate::validate::continuum::{ContinuumForce, Press, press_force};
+use crate::validate::continuum_tap::{ContinuumTap, continuum_tap};
 
 /// Version of the computation: a change of method makes old files misses.
 const VERSION: u32 = 1;
@@ -127,4 +129,71 @@ impl ContinuumCache {
     pub fn file(&self) -> &CacheFile {
         &self.file
     }
+}
+
+/// Taps shipped for the paper's objects.
+const SHIPPED_TAPS: [&str; 2] =
+    [include_str!("../../assets/continuum/tap-A.json"), include_str!("../../assets/continuum/tap-B.json")];
+
+/// One material's kept taps (one per damping ratio): the file's contents.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TapFile {
+    /// The version of the computation.
+    pub version: u32,
+    /// The material's name.
+    pub material: String,
+    /// Its stiffness `C` (Voigt, Pa), row by row, and density (kg/m^3): the key.
+    pub stiffness: Vec<f64>,
+    /// The density, kg/m^3.
+    pub density: f64,
+    /// The taps.
+    pub taps: Vec<ContinuumTap>,
+}
+
+/// The file name of `material`'s taps in a cache folder.
+pub fn tap_file_name(material: &Material) -> String {
+    format!(
+        "continuum-tap-{:016x}.json",
+        crate::io::cache_key((TAP_VERSION, material.density.to_bits()), material.stiffness.iter())
+    )
+}
+
+/// Version of the tap's computation.
+const TAP_VERSION: u32 = 1;
+
+/// The material's converged tap damped by `zeta`: shipped, kept in `dir`, or computed
+/// (minutes; `progress` says what runs) and kept there.
+pub fn tap(
+    material: &Material,
+    zeta: f64,
+    dir: Option<&Path>,
+    progress: &mut dyn FnMut(&str),
+) -> anyhow::Result<ContinuumTap> {
+    let key = stiffness_key(material);
+    let path = dir.map(|d| d.join(tap_file_name(material)));
+    let mut kept: Vec<TapFile> = SHIPPED_TAPS.iter().filter_map(|s| serde_json::from_str(s).ok()).collect();
+    if let Some(path) = &path
+        && let Ok(f) = crate::io::read_json::<TapFile>(path)
+    {
+        kept.push(f);
+    }
+    let mine = |f: &&TapFile| f.version == TAP_VERSION && f.stiffness == key && f.density == material.density;
+    if let Some(found) = kept.iter().filter(mine).flat_map(|f| &f.taps).find(|t| t.damping_ratio == zeta) {
+        return Ok(found.clone());
+    }
+    let computed = continuum_tap(material, zeta, progress)?;
+    if let (Some(path), Some(dir)) = (&path, dir) {
+        let mut file = kept.iter().rfind(mine).cloned().unwrap_or(TapFile {
+            version: TAP_VERSION,
+            material: material.name.clone(),
+            stiffness: key,
+            density: material.density,
+            taps: Vec::new(),
+        });
+        file.taps.push(computed.clone());
+        std::fs::create_dir_all(dir)
+            .map_err(|e| anyhow::anyhow!("cannot create the cache folder {}: {e}", dir.display()))?;
+        crate::io::write_json_atomic(path, &file)?;
+    }
+    Ok(computed)
 }

@@ -11,8 +11,9 @@
 //!   fundamental (integrator error) and with the FEM's (model error).
 //! * **Trajectory error:** each reference transient ([`crate::validate::dynamic_reference`]) run on the model
 //!   with the same load, the relative L2 in time of the loaded face's displacement; the probe tap
-//!   run in the viewer's simulation (its contact and force readout), the relative L2 of the
-//!   force on the probe.
+//!   run in the viewer's simulation (its contact and force readout, [`crate::validate::tap`]), the
+//!   relative L2 of the force on the probe, against the material's tap and on the model's own
+//!   nodes against the same-mesh FEM's.
 
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
@@ -21,9 +22,10 @@ use crate::mechanics::msm::{MsmModel, MsmParams};
 use crate::response::damping::Damping;
 use crate::response::modal::{ModalModel, Mode};
 use crate::response::single_mode::{self, ModeMotion};
+use crate::sim::surface_probe::MaterialSurface;
 use crate::sim::{Integrator, Model, Tissue};
+use crate::validate::continuum_tap::ContinuumTap;
 use crate::validate::dynamic_reference::{self, ReferenceTransient, Trajectory, Transient};
-use glam::DVec3;
 
 /// Largest displacement of the release shape, m (small: every model is near linear).
 pub const RELEASE_AMPLITUDE_M: f64 = 5e-4;
@@ -51,6 +53,9 @@ pub struct References {
     pub fem_modes_hz: Vec<f64>,
     /// The converged transients.
     pub transients: Vec<ReferenceTransient>,
+    /// On the viewer's scene: the material's converged tap and surface compliance (the viewer's
+    /// contact).
+    pub material_tap: Option<(ContinuumTap, MaterialSurface)>,
 }
 
 impl References {
@@ -77,6 +82,16 @@ impl References {
             .filter(|&&t| is_view || t != Transient::ProbeTap)
             .map(|&t| dynamic_reference::converged(material, grid, &scene, zeta, t))
             .collect::<anyhow::Result<Vec<_>>>()?;
+        let material_tap = if is_view {
+            let dir = crate::io::cache_dir();
+            let tap = crate::validate::continuum_cache::tap(material, zeta, dir.as_deref(), &mut |s| {
+                eprintln!("the material's tap ({}): {s}", material.name);
+            })?;
+            let compliance = MaterialSurface::load_or_compute(material, dir.as_deref(), &mut |_| true)?;
+            Some((tap, compliance))
+        } else {
+            None
+        };
         Ok(Self {
             object: material.name.clone(),
             material: material.clone(),
@@ -85,6 +100,7 @@ impl References {
             fem_omega_1,
             fem_modes_hz,
             transients,
+            material_tap,
         })
     }
 }
@@ -123,8 +139,12 @@ pub struct DynamicReport {
     /// their first 0.2 s.
     pub trajectory_error: f64,
     /// The relative L2 error in time of the force on the probe in the 20 ms tap, run in the
-    /// viewer's simulation (its contact and force readout), against the FEM's converged tap.
+    /// viewer's simulation with its contact (the material's surface compliance and slow modes) and force readout, against the material's converged tap
+    /// ([`crate::validate::continuum_tap`]); NaN off the viewer's scene.
     pub probe_tap_error: f64,
+    /// The same with the model's own surface nodes as contact, against the same-mesh FEM's
+    /// converged tap (the `probe_tap` transient).
+    pub probe_tap_own_mesh_error: f64,
     /// `|measured / modal period - 1|`: the integrator's period error.
     pub period_error: f64,
     /// `|measured - set damping ratio|`, in units of critical: the integrator's damping error.
@@ -212,7 +232,7 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
     let mut transients = Vec::new();
     for r in &refs.transients {
         let run = match r.transient {
-            Transient::ProbeTap => tap(material, zeta, config)?,
+            Transient::ProbeTap => crate::validate::tap::run(material, zeta, config, None)?,
             t => Some(trajectory(tissue.as_mut(), &modal, &refs.scene, t, config)?),
         };
         // A run the blow-up guard had to stop has no trajectory: an infinite error.
@@ -226,7 +246,12 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
             .map(|t| t.error)
             .fold(0.0, |a: f64, b| if b.is_nan() { b } else { a.max(b) })
     };
-    let (trajectory_error, probe_tap_error) = (worst(false), worst(true));
+    let (trajectory_error, probe_tap_own_mesh_error) = (worst(false), worst(true));
+    let probe_tap_error = match &refs.material_tap {
+        Some((tap, compliance)) => crate::validate::tap::run(material, zeta, config, Some(compliance))?
+            .map_or(f64::INFINITY, |run| run.relative_error(&tap.trajectory())),
+        None => f64::NAN,
+    };
     Ok(DynamicReport {
         object: refs.object.clone(),
         model: config.model.name(),
@@ -239,6 +264,7 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
         measured_damping_ratio: motion.damping_ratio,
         trajectory_error,
         probe_tap_error,
+        probe_tap_own_mesh_error,
         period_error: single_mode::period_error(motion.period_s, modal_period_s),
         damping_error: (motion.damping_ratio - zeta).abs(),
         fem_period_error: single_mode::period_error(motion.period_s, fem_period_s),
@@ -252,7 +278,7 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
     })
 }
 
-fn steps_for(duration: f64, dt: f64) -> anyhow::Result<usize> {
+pub(crate) fn steps_for(duration: f64, dt: f64) -> anyhow::Result<usize> {
     let n = (duration / dt).round();
     if !(n.is_finite() && n <= MAX_STEPS as f64) {
         anyhow::bail!("{duration} s at dt = {dt} s is more than {MAX_STEPS} steps");
@@ -311,33 +337,6 @@ fn release(
         q.push(coordinate(tissue));
     }
     Ok(fit_recurrence(&q, config.dt))
-}
-
-/// The viewer's probe tap ([`dynamic_reference::tap_centre`]) on the model in the viewer's simulation
-/// (its contact, its force readout): the magnitude of the force on the probe at every step, or
-/// `None` when the blow-up guard stopped it.
-fn tap(material: &Material, zeta: f64, config: Configuration) -> anyhow::Result<Option<Trajectory>> {
-    let tissue = config.model.build(material, config.params, zeta)?;
-    let grid = tissue.grid();
-    let clamp = LoadCase::bottom_clamp(&grid, "view");
-    let mut sim = crate::sim::Simulation::with_tissue(tissue, config.integrator, config.dt, Some(&clamp));
-    let steps = steps_for(dynamic_reference::DURATION_S, config.dt)?;
-    let mut samples = Vec::with_capacity(steps + 1);
-    samples.push(vec![0.0]);
-    // Once the probe has let go nothing pushes on it: zero force from then on.
-    let stepped = steps_for(dynamic_reference::TAP_DURATION_S, config.dt)?.saturating_add(1).min(steps);
-    for k in 1..=stepped {
-        sim.tool = match dynamic_reference::tap_centre(&grid, k as f64 * config.dt) {
-            Some(centre) => crate::sim::Tool::Probe { centre, radius: crate::validate::touch::PROBE_RADIUS_M },
-            None => crate::sim::Tool::None,
-        };
-        if sim.step().is_err() {
-            return Ok(None);
-        }
-        samples.push(vec![DVec3::from(sim.tool_force).length()]);
-    }
-    samples.resize(steps + 1, vec![0.0]);
-    Ok(Some(Trajectory { dt: config.dt, samples }))
 }
 
 /// Least-squares fit of `q_{n+1} = a q_n - b q_{n-1}`: the motion of `(a, b)` (NaN when it has
@@ -442,7 +441,8 @@ impl DynamicReport {
             );
         }
         for e in &r.transients {
-            let what = if e.transient == Transient::ProbeTap { "probe force" } else { "loaded face" };
+            let what =
+                if e.transient == Transient::ProbeTap { "probe force, the model's nodes" } else { "loaded face" };
             let error = if e.error.is_finite() {
                 format!("{:.3} %", 100.0 * e.error)
             } else {
@@ -452,6 +452,13 @@ impl DynamicReport {
                 "trajectory error ({what}), {}: {error} (FEM reference: Newmark, converged at {} s)\n",
                 e.transient.name(),
                 crate::io::num(e.reference_step_s)
+            );
+        }
+        if r.probe_tap_error.is_finite() {
+            t += &format!(
+                "probe force on the tap, the viewer's contact (the material's surface compliance and slow \
+                 modes): {:.3} % against the material's converged tap (relative L2 in time)\n",
+                100.0 * r.probe_tap_error
             );
         }
         t

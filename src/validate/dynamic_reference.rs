@@ -17,7 +17,7 @@
 //! contact nodes' elastic push on the probe, what the viewer reads.
 
 use crate::mechanics::cases::LoadCase;
-use crate::mechanics::grid::Grid;
+use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::sparse::{SparseError, SpdSystem};
 use crate::response::damping::mass_proportional_rate;
 use crate::response::modal::ModalModel;
@@ -67,22 +67,29 @@ pub const TAP_DURATION_S: f64 = 0.02;
 pub const TAP_DEPTH_M: f64 = 0.004;
 
 /// The probe's velocity at `t` during the tap, m/s.
-fn tap_velocity(t: f64) -> Option<[f64; 3]> {
+pub fn tap_velocity(t: f64) -> Option<[f64; 3]> {
     use std::f64::consts::PI;
     (0.0..=TAP_DURATION_S)
         .contains(&t)
         .then(|| [0.0, 0.0, -TAP_DEPTH_M * PI / TAP_DURATION_S * (2.0 * PI * t / TAP_DURATION_S).sin()])
 }
 
-/// The probe's centre at `t` during the tap (`None` once it has let go): above the top-face node
-/// (3, 3) of the 8^3 grid, pressed `TAP_DEPTH_M sin(pi t / TAP_DURATION_S)` below the surface.
-pub fn tap_centre(grid: &Grid, t: f64) -> Option<[f64; 3]> {
+/// Where the tap touches the top face: above the top-face node (3, 3) of the 8^3 grid, m.
+pub const TAP_POINT: [f64; 3] = [3.0 / 7.0 * CUBE_SIDE_M, 3.0 / 7.0 * CUBE_SIDE_M, CUBE_SIDE_M];
+
+/// The probe's centre at `t` during the tap (`None` once it has let go): above [`TAP_POINT`],
+/// pressed `TAP_DEPTH_M sin^2(pi t / TAP_DURATION_S)` below the surface.
+pub fn tap_centre(t: f64) -> Option<[f64; 3]> {
     if !(0.0..=TAP_DURATION_S).contains(&t) {
         return None;
     }
-    let depth = TAP_DEPTH_M * (std::f64::consts::PI * t / TAP_DURATION_S).sin().powi(2);
-    let top = grid.position(grid.node(3, 3, grid.n() - 1));
-    Some([top[0], top[1], top[2] + crate::validate::touch::PROBE_RADIUS_M - depth])
+    let top = TAP_POINT;
+    Some([top[0], top[1], top[2] + crate::validate::touch::PROBE_RADIUS_M - tap_depth(t)])
+}
+
+/// How deep the tap has pressed at `t` (within the tap), m.
+pub fn tap_depth(t: f64) -> f64 {
+    TAP_DEPTH_M * (std::f64::consts::PI * t / TAP_DURATION_S).sin().powi(2)
 }
 
 /// The viewer's scene: face z = 0 clamped, a uniform [`VIEW_LOAD_N`] shear of the top face along x.
@@ -199,7 +206,7 @@ pub fn newmark(
                 * (load[d] + m * (4.0 / (h * h) * u[d] + 4.0 / h * v[d] + a[d]) + alpha * m * (2.0 / h * u[d] + v[d]));
         }
         system.solve_in_place(&mut rhs)?;
-        let contacts = match tap_centre(&model.grid, (k + 1) as f64 * h) {
+        let contacts = match tap_centre((k + 1) as f64 * h) {
             Some(centre) if tap => contact(&mut system, &model.grid, &case.fixed, centre, &mut rhs)?,
             _ => Vec::new(),
         };

@@ -14,9 +14,11 @@
 pub mod accuracy;
 pub mod continuum;
 pub mod continuum_cache;
+pub mod continuum_tap;
 pub mod dynamic_measure;
 pub mod dynamic_reference;
 pub mod presses;
 pub mod probe_score;
+pub mod tap;
 pub mod touch;
 pub mod touch_score;

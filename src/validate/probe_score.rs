@@ -151,6 +151,19 @@ pub fn worst_validation_error(
     Ok(worst)
 }
 
+/// The training presses with the material's force on each (the magnitude, newtons), from the
+/// shipped answers or the cache folder (computed and kept there where missing: minutes).
+pub fn training_forces(material: &Material) -> anyhow::Result<Vec<(Press, f64)>> {
+    let mut cache = ContinuumCache::open(material, crate::io::cache_dir().as_deref());
+    let mut out = Vec::new();
+    for case in press_cases().iter().filter(|c| c.set == Set::Training) {
+        let m = cache.force(material, &case.press, crate::validate::continuum::DEFAULT_TOLERANCE, &mut |_| {})?;
+        out.push((case.press, glam::DVec3::from(m.force).length()));
+    }
+    cache.save()?;
+    Ok(out)
+}
+
 impl MaterialReport {
     /// The table `validate` prints.
     pub fn to_text(&self) -> String {

@@ -19,6 +19,7 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
         ui.selectable_value(&mut settings.calib_cases, CaseSet::Touch, "touch");
         ui.selectable_value(&mut settings.calib_cases, CaseSet::Paper, "paper");
         ui.selectable_value(&mut settings.calib_cases, CaseSet::Both, "both");
+        ui.selectable_value(&mut settings.calib_cases, CaseSet::Presses, "material presses");
     });
     ui.horizontal(|ui| {
         ui.label("seed");

@@ -25,6 +25,8 @@ pub struct PanelContext<'a> {
     pub physics_stopped: Option<&'a str>,
     /// Rest positions (f32), for the error readout.
     pub rest: &'a [[f32; 3]],
+    /// The model's grid.
+    pub grid: crate::mechanics::grid::Grid,
 }
 
 /// Draws the whole panel.

@@ -51,6 +51,18 @@ fn validation(ui: &mut egui::Ui, shown: &Shown, requests: &mut Vec<Request>) {
     }
 }
 
+/// The resolution control: nodes per edge, applied when the slider is let go.
+fn resolution(ui: &mut egui::Ui, settings: &mut ViewSettings, requests: &mut Vec<Request>) {
+    let slider = ui.add(egui::Slider::new(&mut settings.nodes, 4..=24).text("nodes per edge"));
+    if slider.drag_stopped() || (slider.changed() && !slider.dragged()) {
+        requests.push(Request::SetResolution(settings.nodes));
+    }
+    ui.label(
+        "Resolution of the model shown. The probe's force comes from the material's surface compliance at any \
+         resolution; finer grids cost speed (the physics rates show it).",
+    );
+}
+
 /// Draws the section.
 pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, requests: &mut Vec<Request>) {
     let mut reload = false;
@@ -85,6 +97,7 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
         pick(ui, Model::Fem(Formulation::Linear), "FEM linear");
         pick(ui, Model::Fem(Formulation::Corotational), "FEM corotational");
     });
+    resolution(ui, settings, requests);
     validation(ui, shown, requests);
     if shown.fem.is_some() {
         ui.label(

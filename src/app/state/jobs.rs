@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use super::super::physics::Command;
-use crate::response::surface_compliance::SurfaceCompliance;
+use crate::sim::surface_probe::MaterialSurface;
 
 use super::super::calibration_job;
 use super::{ProbeComparison, ViewerState};
@@ -18,7 +18,7 @@ pub(super) enum ComplianceMessage {
     /// The fraction done.
     Progress(f64),
     /// Ready (or failed).
-    Done(Result<Arc<SurfaceCompliance>, String>),
+    Done(Result<MaterialSurface, String>),
 }
 
 impl ViewerState {
@@ -40,7 +40,7 @@ impl ViewerState {
             move |ctx| {
                 let dir = crate::io::cache_dir();
                 // Stopped within a batch when the viewer closes or the material changes.
-                let r = crate::sim::surface_probe::load_or_compute(&material, dir.as_deref(), &mut |f| {
+                let r = MaterialSurface::load_or_compute(&material, dir.as_deref(), &mut |f| {
                     ctx.send(ComplianceMessage::Progress(f));
                     !ctx.cancelled()
                 });
@@ -168,6 +168,7 @@ impl ViewerState {
         let job = calibration_job::Job {
             material,
             topology: self.shown.topology(),
+            grid: self.grid,
             cases: self.settings.calib_cases,
             settings,
         };

@@ -21,6 +21,12 @@ pub struct GradedMesh {
 /// `centre + i fine`), then steps growing by `growth` towards both ends; a last step shorter
 /// than half the one before is merged into it.
 pub fn graded_axis(length: f64, centre: f64, fine: f64, half_width: f64, growth: f64) -> Vec<f64> {
+    capped_axis(length, centre, fine, half_width, growth, f64::INFINITY)
+}
+
+/// [`graded_axis`] with no step longer than `max_step` (the far field kept fine enough for the
+/// cube's own motion).
+pub fn capped_axis(length: f64, centre: f64, fine: f64, half_width: f64, growth: f64, max_step: f64) -> Vec<f64> {
     let lo = (centre - half_width).max(0.0);
     let hi = (centre + half_width).min(length);
     let first = ((lo - centre) / fine).ceil() as i64;
@@ -37,23 +43,23 @@ pub fn graded_axis(length: f64, centre: f64, fine: f64, half_width: f64, growth:
     if length - core[top] < 0.5 * fine {
         core[top] = length;
     }
-    let mut below = extend(core[0], 0.0, fine, growth);
-    let above = extend(core[top], length, fine, growth);
+    let mut below = extend(core[0], 0.0, fine, growth, max_step);
+    let above = extend(core[top], length, fine, growth, max_step);
     below.reverse();
     below.extend(core);
     below.extend(above);
     below
 }
 
-/// Nodes from `start` (excluded) to `end` (included), steps `fine growth^k`, k = 1, 2, ...; the
-/// last step is between half and one and a half times the growing step.
-fn extend(start: f64, end: f64, fine: f64, growth: f64) -> Vec<f64> {
+/// Nodes from `start` (excluded) to `end` (included), steps `min(fine growth^k, max_step)`,
+/// k = 1, 2, ...; the last step is between half and one and a half times the growing step.
+fn extend(start: f64, end: f64, fine: f64, growth: f64, max_step: f64) -> Vec<f64> {
     let sign = if end >= start { 1.0 } else { -1.0 };
     let mut out = Vec::new();
     let mut x = start;
     let mut step = fine;
     while (end - x) * sign > 0.0 {
-        step *= growth;
+        step = (step * growth).min(max_step.max(fine));
         if (end - x) * sign < 1.5 * step {
             out.push(end);
             break;
@@ -69,6 +75,29 @@ impl GradedMesh {
     /// steps growing by `growth` beyond.
     pub fn around(point: [f64; 3], fine: f64, half_width: f64, growth: f64) -> Self {
         Self { axes: [0, 1, 2].map(|a| graded_axis(CUBE_SIDE_M, point[a], fine, half_width, growth)) }
+    }
+
+    /// [`GradedMesh::around`] with no element side longer than `max_step`.
+    pub fn around_capped(point: [f64; 3], fine: f64, half_width: f64, growth: f64, max_step: f64) -> Self {
+        Self { axes: [0, 1, 2].map(|a| capped_axis(CUBE_SIDE_M, point[a], fine, half_width, growth, max_step)) }
+    }
+
+    /// Lumped masses of `density` (kg/m^3): each box's mass shared equally by its eight nodes, kg.
+    pub fn lumped_masses(&self, density: f64) -> Vec<f64> {
+        let [nx, ny, nz] = self.dims();
+        let side = |a: usize, c: usize| self.axes[a][c + 1] - self.axes[a][c];
+        let mut m = vec![0.0; self.num_nodes()];
+        for k in 0..nz - 1 {
+            for j in 0..ny - 1 {
+                for i in 0..nx - 1 {
+                    let share = density * side(0, i) * side(1, j) * side(2, k) / 8.0;
+                    for o in 0..8 {
+                        m[self.node([i + (o & 1), j + ((o >> 1) & 1), k + (o >> 2)])] += share;
+                    }
+                }
+            }
+        }
+        m
     }
 
     /// Node planes per axis.
@@ -125,6 +154,12 @@ pub struct GradedFem {
 impl GradedFem {
     /// Assembles and factorises `K` of `material` on `mesh`, face z = 0 clamped.
     pub fn clamped_bottom(mesh: GradedMesh, material: &Material) -> Result<Self, SparseError> {
+        Self::shifted(mesh, material, 0.0)
+    }
+
+    /// Assembles and factorises `K + shift M` (`M` the lumped masses of the material's density)
+    /// on `mesh`, face z = 0 clamped: the matrix of an implicit step.
+    pub fn shifted(mesh: GradedMesh, material: &Material, shift: f64) -> Result<Self, SparseError> {
         let [nx, ny, nz] = mesh.dims();
         let n = 3 * mesh.num_nodes();
         let elements = (nx - 1) * (ny - 1) * (nz - 1);
@@ -157,6 +192,11 @@ impl GradedFem {
         drop(entries);
         for (&slot, &v) in slots.iter().zip(&values) {
             system.add(slot, v);
+        }
+        if shift != 0.0 {
+            let masses = mesh.lumped_masses(material.density);
+            let per_dof: Vec<f64> = (0..n).map(|d| masses[d / 3]).collect();
+            system.add_diagonal_scaled(shift, &per_dof);
         }
         let fixed: Vec<bool> = (0..n).map(|d| mesh.ijk(d / 3)[2] == 0).collect();
         system.decouple(&fixed, 1.0);
@@ -203,6 +243,16 @@ mod tests {
             }
             let near = steps.iter().zip(&x).filter(|(_, xi)| (**xi - centre).abs() < half - fine);
             assert!(near.clone().all(|(s, _)| *s < fine * 1.0001), "{centre}: {steps:?}");
+        }
+    }
+
+    #[test]
+    fn lumped_masses_weigh_the_cube_and_a_cap_bounds_the_steps() {
+        let mesh = GradedMesh::around_capped([0.043, 0.043, 0.1], 0.002, 0.012, 1.45, 0.008);
+        let total: f64 = mesh.lumped_masses(1000.0).iter().sum();
+        assert!((total - 1.0).abs() < 1e-9, "{total}");
+        for axis in &mesh.axes {
+            assert!(axis.windows(2).all(|w| w[1] - w[0] < 1.5 * 0.008 + 1e-12), "{axis:?}");
         }
     }
 

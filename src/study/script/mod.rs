@@ -305,10 +305,14 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     check_steps(script, sim.dt)?;
     let probes = script.actions.iter().any(|a| matches!(a, Action::Probe { .. } | Action::ProbePath { .. }));
     if script.contact == Contact::Surface && probes {
-        let compliance =
-            crate::sim::surface_probe::load_or_compute(&material, crate::io::cache_dir().as_deref(), &mut |_| true)
-                .map_err(|e| anyhow::anyhow!("script: the probe's surface compliance: {e:#}"))?;
-        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::new(compliance, grid)));
+        let surface = crate::sim::surface_probe::MaterialSurface::load_or_compute(
+            &material,
+            crate::io::cache_dir().as_deref(),
+            &mut |_| true,
+        )
+        .map_err(|e| anyhow::anyhow!("script: the probe's surface compliance: {e:#}"))?;
+        let zeta = sim.tissue.damping().ratio();
+        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::on(&surface, grid, zeta)));
     }
     let rest = grid.positions();
     let mut out = Outcome {
