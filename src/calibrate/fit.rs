@@ -220,7 +220,6 @@ pub fn stiffness_fit(fem: &FemModel, topology: Topology, transversely_isotropic:
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mechanics::grid::Grid;
     use crate::mechanics::material::Material;
 
     #[test]
@@ -243,6 +242,30 @@ mod tests {
                 "{i}: {fd} vs {}",
                 g[i]
             );
+        }
+    }
+
+    #[test]
+    fn press_gradient_matches_finite_differences() {
+        // The material's training presses (shipped for A), node contact on a 10^3 hex lattice.
+        let grid = Grid::new(10).unwrap();
+        let m = Material::object_a();
+        let presses = crate::validate::probe_score::training_forces(&m).unwrap();
+        assert_eq!(presses.len(), 24);
+        let stiffness = GroupedStiffness::lattice(grid, Topology::Hex);
+        let mut responder = Responder::new(grid, stiffness, &[1.0; 7]).unwrap();
+        let mut cost = |t: &[f64; 7]| press_cost(&presses, grid, &mut responder, t).unwrap();
+        let theta = [600.0, 500.0, 450.0, 90.0, 80.0, 70.0, 50.0];
+        let (c, g) = cost(&theta);
+        assert!(c > 0.0 && c.is_finite());
+        for i in 0..7 {
+            let h = 1e-6 * theta[i];
+            let (mut up, mut down) = (theta, theta);
+            up[i] += h;
+            down[i] -= h;
+            let fd = (cost(&up).0 - cost(&down).0) / (2.0 * h);
+            let scale = g.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            assert!((fd - g[i]).abs() <= 1e-4 * scale, "{i}: {fd} vs {}", g[i]);
         }
     }
 

@@ -232,7 +232,12 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
     let mut transients = Vec::new();
     for r in &refs.transients {
         let run = match r.transient {
-            Transient::ProbeTap => crate::validate::tap::run(material, zeta, config, None)?,
+            Transient::ProbeTap => crate::validate::tap::run(
+                config.model.build(material, config.params, zeta)?,
+                config.integrator,
+                config.dt,
+                None,
+            )?,
             t => Some(trajectory(tissue.as_mut(), &modal, &refs.scene, t, config)?),
         };
         // A run the blow-up guard had to stop has no trajectory: an infinite error.
@@ -248,8 +253,11 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
     };
     let (trajectory_error, probe_tap_own_mesh_error) = (worst(false), worst(true));
     let probe_tap_error = match &refs.material_tap {
-        Some((tap, compliance)) => crate::validate::tap::run(material, zeta, config, Some(compliance))?
-            .map_or(f64::INFINITY, |run| run.relative_error(&tap.trajectory())),
+        Some((tap, surface)) => {
+            let tissue = config.model.build(material, config.params, zeta)?;
+            crate::validate::tap::run(tissue, config.integrator, config.dt, Some(surface))?
+                .map_or(f64::INFINITY, |run| run.relative_error(&tap.trajectory()))
+        }
         None => f64::NAN,
     };
     Ok(DynamicReport {
@@ -278,7 +286,7 @@ pub fn measure(refs: &References, config: Configuration) -> anyhow::Result<Dynam
     })
 }
 
-pub(crate) fn steps_for(duration: f64, dt: f64) -> anyhow::Result<usize> {
+fn steps_for(duration: f64, dt: f64) -> anyhow::Result<usize> {
     let n = (duration / dt).round();
     if !(n.is_finite() && n <= MAX_STEPS as f64) {
         anyhow::bail!("{duration} s at dt = {dt} s is more than {MAX_STEPS} steps");
