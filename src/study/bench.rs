@@ -32,6 +32,9 @@ pub struct BenchReport {
     pub msm_static_9_cases_newton_s: f64,
     /// Newton on the 9 cases of the shear-spring model.
     pub msm_shear_static_9_cases_newton_s: f64,
+    /// The linear FEM's elastic force `K u`, keyed by nodes per axis: by the stencil (what the
+    /// FEM steps use) and by the element loop (before), seconds.
+    pub fem_linear_force_s: BTreeMap<usize, (f64, f64)>,
     /// One 1 ms physics tick of the viewer's scene (face z = 0 clamped, object A, 8^3) with the
     /// probe pressed 4 mm into the top face, keyed by `model/integrator/dt`: the viewer keeps up
     /// with 1 kHz real time when this is below 1 ms.
@@ -128,6 +131,47 @@ fn implicit_step(n: usize, params: MsmParams, prefactored: bool) -> anyhow::Resu
     Ok(time_fallible(0.5, || step(&mut dynamics))?)
 }
 
+/// The linear FEM's `K u` by the stencil and by the element loop, at 8^3, 16^3 and 32^3.
+fn fem_linear_force(material: &Material) -> anyhow::Result<BTreeMap<usize, (f64, f64)>> {
+    let mut out = BTreeMap::new();
+    for n in [8, 16, 32] {
+        let fem = FemModel::new(Grid::new(n)?, material);
+        let u: Vec<f64> = (0..3 * fem.grid.num_nodes()).map(|d| ((d * 7919) % 101) as f64 * 1e-6).collect();
+        let mut ku = vec![0.0; u.len()];
+        let stencil = time_per_call(0.3, || fem.apply(std::hint::black_box(&u), &mut ku));
+        let elements = time_per_call(0.3, || fem.apply_by_elements(std::hint::black_box(&u), &mut ku));
+        out.insert(n, (stencil, elements));
+    }
+    Ok(out)
+}
+
+/// The viewer's 1 ms tick with the probe pressed, keyed by `model/integrator/dt[/contact]`.
+fn viewer_ticks() -> anyhow::Result<BTreeMap<String, f64>> {
+    let mut viewer_tick_with_probe_s = BTreeMap::new();
+    use crate::mechanics::fem::dynamics::Formulation;
+    use crate::sim::{Integrator, Model};
+    let default = Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY);
+    // The viewer's default with the material's surface compliance, the probe still and
+    // sliding (the automatic choice's 4 substeps of a 1 ms tick).
+    for (run, name) in [(ProbeRun::SurfaceStill, "surface"), (ProbeRun::SurfaceSliding, "surface-sliding")] {
+        let key = format!("{}/symplectic/0.00025/{name}", default.name());
+        viewer_tick_with_probe_s.insert(key, probe_tick(default, Integrator::Symplectic, 2.5e-4, run)?);
+    }
+    for (model, integrator, dt) in [
+        (Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY), Integrator::Symplectic, 1e-4),
+        (Model::Fem(Formulation::Corotational), Integrator::Symplectic, 1e-4),
+        // The viewer's automatic choice for the FEM's 1 ms request (the dynamic budget).
+        (Model::Fem(Formulation::Corotational), Integrator::Symplectic, 2.5e-4),
+        (Model::Fem(Formulation::Linear), Integrator::Symplectic, 2.5e-4),
+        (Model::Fem(Formulation::Corotational), Integrator::Prefactored, 1e-3),
+        (Model::Fem(Formulation::Linear), Integrator::Prefactored, 1e-3),
+    ] {
+        let key = format!("{}/{}/{dt}", model.name(), integrator.name());
+        viewer_tick_with_probe_s.insert(key, probe_tick(model, integrator, dt, ProbeRun::NodesStill)?);
+    }
+    Ok(viewer_tick_with_probe_s)
+}
+
 /// Runs every benchmark (about 10 s in a release build).
 pub fn run() -> anyhow::Result<BenchReport> {
     let mut msm_explicit_step_s = BTreeMap::new();
@@ -149,8 +193,9 @@ pub fn run() -> anyhow::Result<BenchReport> {
     for n in [8, 16] {
         msm_hex_prefactored_step_s.insert(n, implicit_step(n, hex, true)?);
     }
-    let grid = Grid::paper();
     let material = Material::object_a();
+    let fem_linear_force_s = fem_linear_force(&material)?;
+    let grid = Grid::paper();
     let cases = benchmark_cases(&grid, "A", Bc::Clamped);
     let mut err = None;
     let fem_static_9_cases_s = time_per_call(1.0, || {
@@ -177,31 +222,9 @@ pub fn run() -> anyhow::Result<BenchReport> {
     let msm_static_9_cases_newton_s = newton(&model);
     let shear = MsmModel::new(grid, shear_params(), material.density)?;
     let msm_shear_static_9_cases_newton_s = newton(&shear);
-    let mut viewer_tick_with_probe_s = BTreeMap::new();
-    {
-        use crate::mechanics::fem::dynamics::Formulation;
-        use crate::sim::{Integrator, Model};
-        let default = Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY);
-        // The viewer's default with the material's surface compliance, the probe still and
-        // sliding (the automatic choice's 4 substeps of a 1 ms tick).
-        for (run, name) in [(ProbeRun::SurfaceStill, "surface"), (ProbeRun::SurfaceSliding, "surface-sliding")] {
-            let key = format!("{}/symplectic/0.00025/{name}", default.name());
-            viewer_tick_with_probe_s.insert(key, probe_tick(default, Integrator::Symplectic, 2.5e-4, run)?);
-        }
-        for (model, integrator, dt) in [
-            (Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY), Integrator::Symplectic, 1e-4),
-            (Model::Fem(Formulation::Corotational), Integrator::Symplectic, 1e-4),
-            // The viewer's automatic choice for the FEM's 1 ms request (the dynamic budget).
-            (Model::Fem(Formulation::Corotational), Integrator::Symplectic, 2.5e-4),
-            (Model::Fem(Formulation::Linear), Integrator::Symplectic, 2.5e-4),
-            (Model::Fem(Formulation::Corotational), Integrator::Prefactored, 1e-3),
-            (Model::Fem(Formulation::Linear), Integrator::Prefactored, 1e-3),
-        ] {
-            let key = format!("{}/{}/{dt}", model.name(), integrator.name());
-            viewer_tick_with_probe_s.insert(key, probe_tick(model, integrator, dt, ProbeRun::NodesStill)?);
-        }
-    }
+    let viewer_tick_with_probe_s = viewer_ticks()?;
     Ok(BenchReport {
+        fem_linear_force_s,
         viewer_tick_with_probe_s,
         msm_explicit_step_s,
         msm_shear_explicit_step_s,
@@ -230,6 +253,15 @@ impl BenchReport {
             for (n, t) in map {
                 s += &format!("{name:<40} n={n:>3}: {}\n", us(*t));
             }
+        }
+        for (n, (stencil, elements)) in &self.fem_linear_force_s {
+            s += &format!(
+                "{:<40} n={n:>3}: {} (element loop {}, {:.2}x)\n",
+                "FEM linear force K u, stencil",
+                us(*stencil),
+                us(*elements).trim(),
+                elements / stencil
+            );
         }
         s += &format!("{:<46}: {}\n", "FEM static, 9 clamped cases (A, 8^3)", us(self.fem_static_9_cases_s));
         s += &format!("{:<46}: {}\n", "MSM static, 9 cases, closed form", us(self.msm_static_9_cases_s));

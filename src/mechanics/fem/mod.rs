@@ -10,6 +10,7 @@ pub mod clamped;
 pub mod dynamics;
 pub mod element;
 pub mod graded;
+pub mod stencil;
 
 use crate::mechanics::cases::{CaseSolution, LoadCase};
 use crate::mechanics::grid::Grid;
@@ -30,6 +31,7 @@ pub struct FemModel {
     /// The material stiffness `C` (Voigt).
     pub material: nalgebra::Matrix6<f64>,
     elements: Vec<[usize; 8]>,
+    stencil: stencil::Stencil,
 }
 
 impl FemModel {
@@ -57,16 +59,24 @@ impl FemModel {
 
     /// Builds the element matrix of `material` on `grid`.
     pub fn new(grid: Grid, material: &Material) -> Self {
+        let ke = hex8_stiffness(&material.stiffness, grid.h());
         Self {
             grid,
-            ke: hex8_stiffness(&material.stiffness, grid.h()),
+            stencil: stencil::Stencil::new(&grid, &ke),
+            ke,
             material: material.stiffness,
             elements: grid.elements().collect(),
         }
     }
 
-    /// `out = K u` over all degrees of freedom, element by element.
+    /// `out = K u` over all degrees of freedom, by the stencil ([`stencil`]). Allocates nothing.
     pub fn apply(&self, u: &[f64], out: &mut [f64]) {
+        self.stencil.apply(u, out);
+    }
+
+    /// `out = K u` over all degrees of freedom, element by element: the stencil's check, and
+    /// the baseline `bench` compares it with.
+    pub fn apply_by_elements(&self, u: &[f64], out: &mut [f64]) {
         out.fill(0.0);
         let mut ue = [0.0; 24];
         for nodes in &self.elements {
