@@ -70,6 +70,7 @@ value_enum!(Integrator {
     Symplectic => "symplectic", "Symplectic (semi-implicit) Euler: cheap, stable below a critical time step";
     Implicit => "implicit", "Linearised backward Euler with the tangent of every step (lattices only)";
     Prefactored => "prefactored", "Linearised backward Euler with the rest tangent factorised once";
+    Newmark => "newmark", "Newmark average acceleration (trapezoidal, no numerical damping) with the rest tangent factorised once";
 });
 value_enum!(Metric {
     Max => "max", "The worst node (the default: a budget holds everywhere)";

@@ -140,6 +140,7 @@ impl Tissue for FemTissue {
         match integrator {
             Integrator::Symplectic => self.dynamics.step_symplectic(dt),
             Integrator::Prefactored => self.dynamics.step_prefactored(dt).map_err(|e| e.to_string())?,
+            Integrator::Newmark => self.dynamics.step_newmark(dt).map_err(|e| e.to_string())?,
             Integrator::Implicit => return check_integrator(integrator),
         }
         self.copy_out();
@@ -198,6 +199,6 @@ pub fn check_integrator(integrator: Integrator) -> Result<(), String> {
         Integrator::Implicit => {
             Err("the FEM models step with symplectic or prefactored implicit Euler, not implicit".into())
         }
-        Integrator::Symplectic | Integrator::Prefactored => Ok(()),
+        Integrator::Symplectic | Integrator::Prefactored | Integrator::Newmark => Ok(()),
     }
 }

@@ -15,6 +15,9 @@ pub enum Integrator {
     Implicit,
     /// Linearised backward Euler with the rest tangent factorised once: one solve per step.
     Prefactored,
+    /// Newmark's average acceleration (the trapezoidal rule) with the rest tangent factorised
+    /// once: one solve per step, no numerical damping, second order.
+    Newmark,
 }
 
 impl Integrator {
@@ -23,6 +26,7 @@ impl Integrator {
         match self {
             Integrator::Symplectic => crate::response::single_mode::Scheme::Symplectic,
             Integrator::Implicit | Integrator::Prefactored => crate::response::single_mode::Scheme::BackwardEuler,
+            Integrator::Newmark => crate::response::single_mode::Scheme::Trapezoidal,
         }
     }
 
@@ -32,6 +36,7 @@ impl Integrator {
             Integrator::Symplectic => "symplectic",
             Integrator::Implicit => "implicit",
             Integrator::Prefactored => "prefactored",
+            Integrator::Newmark => "newmark",
         }
     }
 }
@@ -80,7 +85,7 @@ impl StepLimit {
     pub fn of(self, integrator: Integrator) -> f64 {
         match integrator {
             Integrator::Symplectic => 1.0 / (self.tissue.powi(-2) + self.tool.powi(-2)).sqrt(),
-            Integrator::Implicit | Integrator::Prefactored => self.tool,
+            Integrator::Implicit | Integrator::Prefactored | Integrator::Newmark => self.tool,
         }
     }
 
@@ -100,7 +105,7 @@ impl StepLimit {
         let limit = self.of(integrator);
         let (margin, above) = match integrator {
             Integrator::Symplectic => (MAX_EXPLICIT_FRACTION, format!("{MAX_EXPLICIT_FRACTION} x ")),
-            Integrator::Implicit | Integrator::Prefactored => (1.0, String::new()),
+            Integrator::Implicit | Integrator::Prefactored | Integrator::Newmark => (1.0, String::new()),
         };
         if dt <= margin * limit {
             return None;

@@ -95,6 +95,7 @@ impl Tissue for MsmTissue {
             }
             Integrator::Implicit => self.dynamics.step_implicit(&self.model, dt).map_err(|e| e.to_string()),
             Integrator::Prefactored => self.dynamics.step_prefactored(&self.model, dt).map_err(|e| e.to_string()),
+            Integrator::Newmark => self.dynamics.step_newmark(&self.model, dt).map_err(|e| e.to_string()),
         }
     }
     fn kinetic_energy(&self) -> f64 {

@@ -165,6 +165,10 @@ fn viewer_ticks() -> anyhow::Result<BTreeMap<String, f64>> {
         (Model::Fem(Formulation::Linear), Integrator::Symplectic, 2.5e-4),
         (Model::Fem(Formulation::Corotational), Integrator::Prefactored, 1e-3),
         (Model::Fem(Formulation::Linear), Integrator::Prefactored, 1e-3),
+        // One Newmark (trapezoidal) solve per tick: inside the dynamic budget.
+        (Model::Fem(Formulation::Corotational), Integrator::Newmark, 1e-3),
+        (Model::Fem(Formulation::Linear), Integrator::Newmark, 1e-3),
+        (Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY), Integrator::Newmark, 1e-3),
     ] {
         let key = format!("{}/{}/{dt}", model.name(), integrator.name());
         viewer_tick_with_probe_s.insert(key, probe_tick(model, integrator, dt, ProbeRun::NodesStill)?);

@@ -16,12 +16,13 @@ pub const CHARTED: [Model; 4] = [
     Model::Fem(Formulation::Corotational),
 ];
 
-/// The integrator of a chart point in the chart's files: `explicit` (symplectic Euler) or
-/// `implicit` (prefactored backward Euler).
+/// The integrator of a chart point in the chart's files: `explicit` (symplectic Euler),
+/// `implicit` (prefactored backward Euler) or `newmark` (prefactored trapezoidal rule).
 pub fn integrator_chart_name(integrator: Integrator) -> &'static str {
     match integrator {
         Integrator::Symplectic => "explicit",
         Integrator::Implicit | Integrator::Prefactored => "implicit",
+        Integrator::Newmark => "newmark",
     }
 }
 
@@ -49,12 +50,14 @@ mod chart_names {
     }
 
     pub fn deserialize_integrator<'de, D: Deserializer<'de>>(d: D) -> Result<Integrator, D::Error> {
-        // The chart's two schemes, by the names [`super::integrator_chart_name`] gives them.
+        // The chart's schemes, by the names [`super::integrator_chart_name`] gives them.
         let name = String::deserialize(d)?;
-        [Integrator::Symplectic, Integrator::Prefactored]
+        [Integrator::Symplectic, Integrator::Prefactored, Integrator::Newmark]
             .into_iter()
             .find(|i| super::integrator_chart_name(*i) == name)
-            .ok_or_else(|| D::Error::custom(format!("unknown variant `{name}`, expected `explicit` or `implicit`")))
+            .ok_or_else(|| {
+                D::Error::custom(format!("unknown variant `{name}`, expected `explicit`, `implicit` or `newmark`"))
+            })
     }
 }
 

@@ -133,7 +133,9 @@ pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[Model], axis: Axis) -
                     .draw_series(of_model.iter().map(|p| {
                         let label = match (axis, p.integrator) {
                             (Axis::Static, Integrator::Symplectic) => format!("{}", p.n),
-                            (Axis::Static, Integrator::Prefactored | Integrator::Implicit) => String::new(),
+                            (Axis::Static, Integrator::Prefactored | Integrator::Implicit | Integrator::Newmark) => {
+                                String::new()
+                            }
                             (Axis::Dynamic, _) => format!("{:.2}", p.dt_s * 1e3),
                         };
                         Text::new(label, (p.cost_per_sim_s, axis.of(p)), ("sans-serif", 10).into_font())

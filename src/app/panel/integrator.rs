@@ -78,6 +78,15 @@ pub fn show(ui: &mut egui::Ui, shown: &Shown, published: &Published, requests: &
             ask = Some(Some(chosen));
         }
         if ui
+            .selectable_value(&mut chosen, Integrator::Newmark, "Newmark, prefactored")
+            .on_hover_text(
+                "the trapezoidal rule with the rest tangent factorised once: one solve per step, no numerical damping",
+            )
+            .changed()
+        {
+            ask = Some(Some(chosen));
+        }
+        if ui
             .selectable_value(&mut chosen, Integrator::Implicit, "implicit, full tangent")
             .on_hover_text("backward Euler refactorising the current tangent every step")
             .changed()

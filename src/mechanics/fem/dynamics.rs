@@ -60,8 +60,9 @@ pub struct FemDynamics {
     u: Vec<f64>,
     /// Per element: the rotation of the last force evaluation (warm start of the next).
     rotations: Vec<Rotation3<f64>>,
-    /// The factor, its right-hand side buffer, and the `(dt, alpha)` it was built for.
-    implicit: Option<(SpdSystem, Vec<f64>, (f64, f64))>,
+    /// The factor, its right-hand side buffer, and the `(dt, alpha, trapezoidal)` it was built
+    /// for.
+    implicit: Option<(SpdSystem, Vec<f64>, (f64, f64, bool))>,
 }
 
 impl FemDynamics {
@@ -184,36 +185,58 @@ impl FemDynamics {
     /// linear model; for the corotational one the forces are corotational and the Jacobian is
     /// the rest stiffness. The first step (or a new `dt`) factorises; later steps allocate nothing.
     pub fn step_prefactored(&mut self, dt: f64) -> Result<(), SparseError> {
-        let key = (dt, self.alpha);
+        self.prefactored_step(dt, false)
+    }
+
+    /// One step of Newmark's average acceleration (the trapezoidal rule: no numerical damping,
+    /// second order) with the linear stiffness factorised once per `dt`:
+    /// `(M (1 + dt alpha / 2) + dt^2 / 4 K) dx = dt M v + dt^2 / 2 f(x)`, `v' = 2 dx / dt - v`,
+    /// `x += dx`. Exact trapezoidal steps for the linear model; for the corotational one the
+    /// forces are corotational and the Jacobian is the rest stiffness (one solve, no iteration).
+    pub fn step_newmark(&mut self, dt: f64) -> Result<(), SparseError> {
+        self.prefactored_step(dt, true)
+    }
+
+    fn prefactored_step(&mut self, dt: f64, trapezoidal: bool) -> Result<(), SparseError> {
+        let key = (dt, self.alpha, trapezoidal);
         // Moved out while the forces are computed, and back in (moves only: no allocation).
         let work = match self.implicit.take() {
             Some(work) if work.2 == key => work,
             stale => {
                 self.implicit = stale; // kept if the new factorisation fails
-                (self.prefactored_system(dt)?, vec![0.0; self.x.len()], key)
+                (self.prefactored_system(dt, trapezoidal)?, vec![0.0; self.x.len()], key)
             }
         };
         self.compute_forces();
         let (system, rhs, _) = self.implicit.insert(work);
+        let (v_scale, f_scale) = if trapezoidal { (dt, 0.5 * dt * dt) } else { (1.0, dt) };
         for i in 0..rhs.len() {
-            rhs[i] = (self.mass[i] * self.v[i] + dt * self.f[i]) * self.free[i];
+            rhs[i] = (v_scale * self.mass[i] * self.v[i] + f_scale * self.f[i]) * self.free[i];
         }
         system.solve_in_place(rhs)?;
         for i in 0..rhs.len() {
-            self.v[i] = rhs[i] * self.free[i];
-            self.x[i] += dt * self.v[i];
+            let solved = rhs[i] * self.free[i];
+            if trapezoidal {
+                self.v[i] = (2.0 * solved / dt - self.v[i]) * self.free[i];
+                self.x[i] += solved;
+            } else {
+                self.v[i] = solved;
+                self.x[i] += dt * solved;
+            }
         }
         Ok(())
     }
 
-    /// `M (1 + dt alpha) + dt^2 K` with the fixed dofs decoupled, factorised.
-    fn prefactored_system(&self, dt: f64) -> Result<SpdSystem, SparseError> {
+    /// `M (1 + dt alpha) + dt^2 K` (backward Euler) or `M (1 + dt alpha / 2) + dt^2 / 4 K` (the
+    /// trapezoidal rule) with the fixed dofs decoupled, factorised.
+    fn prefactored_system(&self, dt: f64, trapezoidal: bool) -> Result<SpdSystem, SparseError> {
+        let (c_scale, k_scale) = if trapezoidal { (0.5 * dt, 0.25 * dt * dt) } else { (dt, dt * dt) };
         let (entries, values) = self.model.stiffness_entries();
         let (mut system, slots) = SpdSystem::new(self.x.len(), &entries)?;
         for (slot, v) in slots.iter().zip(values) {
-            system.add(*slot, dt * dt * v);
+            system.add(*slot, k_scale * v);
         }
-        system.add_diagonal_scaled(1.0 + dt * self.alpha, &self.mass);
+        system.add_diagonal_scaled(1.0 + c_scale * self.alpha, &self.mass);
         let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
         system.decouple(&fixed, 1.0);
         system.factor()?;

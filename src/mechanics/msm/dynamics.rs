@@ -48,6 +48,8 @@ struct PrefactoredWork {
     rest: [Vec<f64>; 3],
     /// The `dt` of the factor; NaN when it must be rebuilt (new parameters).
     dt: f64,
+    /// Whether the factor is the trapezoidal rule's (else backward Euler's).
+    trapezoidal: bool,
     /// `m_p + dt c_p` of each node, then folded onto the unknowns.
     node_diag: Vec<f64>,
     mass: Vec<f64>,
@@ -184,6 +186,18 @@ impl Dynamics {
     /// and one pair of triangular solves. The factor is rebuilt when `dt`, the parameters or
     /// the fixed nodes change; a step that reuses it allocates nothing.
     pub fn step_prefactored(&mut self, model: &MsmModel, dt: f64) -> Result<(), SparseError> {
+        self.prefactored_step(model, dt, false)
+    }
+
+    /// One step of Newmark's average acceleration (the trapezoidal rule: no numerical damping,
+    /// second order) linearised with the rest tangent `K_0`, factorised once:
+    /// `(M + dt/2 C + dt^2/4 K_0) dx = dt M v + dt^2/2 f(x)`, then `v' = 2 dx / dt - v` and
+    /// `x += dx`. Exact trapezoidal steps for a linear model; one force pass and one solve.
+    pub fn step_newmark(&mut self, model: &MsmModel, dt: f64) -> Result<(), SparseError> {
+        self.prefactored_step(model, dt, true)
+    }
+
+    fn prefactored_step(&mut self, model: &MsmModel, dt: f64, trapezoidal: bool) -> Result<(), SparseError> {
         // Moved out while the forces are computed, and back in (moves only: no allocation).
         let work = match self.prefactored.take() {
             Some(work) => work,
@@ -195,26 +209,31 @@ impl Dynamics {
                 let rest = std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect());
                 let mass = vec![0.0; tangent.system.n()];
                 let node_diag = vec![0.0; g.num_nodes()];
-                PrefactoredWork { tangent, rhs, rest, dt: f64::NAN, node_diag, mass }
+                PrefactoredWork { tangent, rhs, rest, dt: f64::NAN, trapezoidal, node_diag, mass }
             }
         };
         self.forces(model);
         let work = self.prefactored.insert(work);
-        if work.dt != dt {
-            work.tangent.assemble(model, &work.rest, dt * dt, 0.0, false, None);
+        // Backward Euler solves for v' with (dt, dt^2); the trapezoidal rule for dx with
+        // (dt/2, dt^2/4) and its right-hand side scaled by dt.
+        let (c_scale, k_scale) = if trapezoidal { (0.5 * dt, 0.25 * dt * dt) } else { (dt, dt * dt) };
+        if work.dt != dt || work.trapezoidal != trapezoidal {
+            work.tangent.assemble(model, &work.rest, k_scale, 0.0, false, None);
             for ((o, m), c) in work.node_diag.iter_mut().zip(&model.masses).zip(&model.damping) {
-                *o = m + dt * c;
+                *o = m + c_scale * c;
             }
             work.tangent.dofs.fold_masses(&work.node_diag, &mut work.mass);
             work.tangent.system.add_diagonal_scaled(1.0, &work.mass);
             work.tangent.system.factor()?;
-            work.dt = dt;
+            (work.dt, work.trapezoidal) = (dt, trapezoidal);
         }
+        let (v_scale, f_scale) = if trapezoidal { (dt, 0.5 * dt * dt) } else { (1.0, dt) };
         for (p, &free) in self.free.iter().enumerate() {
             if free != 0.0 {
                 let m = model.masses[p];
                 for c in 0..3 {
-                    work.rhs[work.tangent.dofs.map[3 * p + c].0 as usize] = m * self.v[c][p] + dt * self.f[c][p];
+                    work.rhs[work.tangent.dofs.map[3 * p + c].0 as usize] =
+                        v_scale * m * self.v[c][p] + f_scale * self.f[c][p];
                 }
             }
         }
@@ -222,8 +241,14 @@ impl Dynamics {
         for (p, &free) in self.free.iter().enumerate() {
             if free != 0.0 {
                 for c in 0..3 {
-                    self.v[c][p] = work.rhs[work.tangent.dofs.map[3 * p + c].0 as usize];
-                    self.x[c][p] += dt * self.v[c][p];
+                    let solved = work.rhs[work.tangent.dofs.map[3 * p + c].0 as usize];
+                    if trapezoidal {
+                        self.v[c][p] = 2.0 * solved / dt - self.v[c][p];
+                        self.x[c][p] += solved;
+                    } else {
+                        self.v[c][p] = solved;
+                        self.x[c][p] += dt * solved;
+                    }
                 }
             }
         }
