@@ -344,32 +344,7 @@ fn release(
         step(tissue, config)?;
         q.push(coordinate(tissue));
     }
-    Ok(fit_recurrence(&q, config.dt))
-}
-
-/// Least-squares fit of `q_{n+1} = a q_n - b q_{n-1}`: the motion of `(a, b)` (NaN when it has
-/// none: unstable or not oscillating in a continuous way) and the relative residual.
-pub fn fit_recurrence(q: &[f64], dt: f64) -> (ModeMotion, f64) {
-    let (mut s11, mut s12, mut s22, mut r1, mut r2, mut yy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for w in q.windows(3) {
-        let (x1, x2, y) = (w[1], -w[0], w[2]);
-        s11 += x1 * x1;
-        s12 += x1 * x2;
-        s22 += x2 * x2;
-        r1 += x1 * y;
-        r2 += x2 * y;
-        yy += y * y;
-    }
-    let det = s11 * s22 - s12 * s12;
-    let nan = ModeMotion { period_s: f64::NAN, damping_ratio: f64::NAN };
-    if !(det.is_finite() && det > 0.0) {
-        return (nan, f64::NAN);
-    }
-    let a = (r1 * s22 - r2 * s12) / det;
-    let b = (s11 * r2 - s12 * r1) / det;
-    let res: f64 = q.windows(3).map(|w| (w[2] - a * w[1] + b * w[0]).powi(2)).sum();
-    let motion = single_mode::from_recurrence(a, b, dt).unwrap_or(nan);
-    (motion, (res / yy).sqrt())
+    Ok(single_mode::fit_recurrence(&q, config.dt))
 }
 
 /// The model's run of `transient` on `scene`: from rest with the load (step), or from its own
