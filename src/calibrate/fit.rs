@@ -70,6 +70,16 @@ impl Groups {
     }
 }
 
+/// Adds `(r - 1)^2`, `r = value / reference`, to `cost` and its gradient to `grad`, given the
+/// adjoint forms `w^T K_g u` of each group (`dr/dtheta_g = -forms_g / reference`).
+fn add_ratio_term(value: f64, reference: f64, forms: &[f64], cost: &mut f64, grad: &mut [f64]) {
+    let ratio = value / reference;
+    *cost += (ratio - 1.0).powi(2);
+    for (g, f) in grad.iter_mut().zip(forms) {
+        *g -= 2.0 * (ratio - 1.0) * f / reference;
+    }
+}
+
 /// The touch cost of a lattice over `set` of `reference` at `theta` (one value per group of the
 /// responder's stiffness), and its gradient by each group; `responder` is the lattice's (any
 /// parameters: it is refactorised here).
@@ -90,14 +100,10 @@ pub fn touch_cost(
         }
         count += 1;
         let (answer, sensitivity) = r.answer(case)?;
-        let ratio = answer.feel / fem.feel;
-        cost += (ratio - 1.0).powi(2);
         // dr/dtheta_g = -w^T K_g u / feel_fem: w = u for a force load, the probe's adjoint field.
         let w = sensitivity.as_ref().unwrap_or(&answer.u);
         r.stiffness.group_forms(w, &answer.u, &mut forms);
-        for g in 0..groups {
-            grad[g] -= 2.0 * (ratio - 1.0) * forms[g] / fem.feel;
-        }
+        add_ratio_term(answer.feel, fem.feel, &forms, &mut cost, &mut grad);
         if sensitivity.is_none() {
             // The field error, by one adjoint solve.
             let ref2: f64 = fem.u.iter().map(|v| v * v).sum();
@@ -130,12 +136,8 @@ pub fn press_cost(
     let mut forms = vec![0.0; groups];
     for (press, material) in presses {
         let answer = r.solver.probe(&grid, press.centre(), press.radius)?;
-        let ratio = answer.force_n() / material;
-        cost += (ratio - 1.0).powi(2);
         r.stiffness.group_forms(&answer.sensitivity, &answer.u, &mut forms);
-        for g in 0..groups {
-            grad[g] -= 2.0 * (ratio - 1.0) * forms[g] / material;
-        }
+        add_ratio_term(answer.force_n(), *material, &forms, &mut cost, &mut grad);
     }
     let n = presses.len().max(1) as f64;
     Ok((cost / n, grad.into_iter().map(|g| g / n).collect()))
