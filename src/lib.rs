@@ -13,6 +13,8 @@
 //!    contact, modes, damping, integrators on one mode).
 //! 3. [`sim`]: the models the simulation steps (one model and one integrator vocabulary), the
 //!    step policy, tools, the blow-up guard, the shipped tissues.
+//!    [`gpu`] (3b): the lattices' and the linear FEM's explicit step as wgpu compute shaders,
+//!    behind the simulation's seam.
 //! 4. [`validate`]: the touch benchmark, the dynamic reference and its measurement, static
 //!    accuracy.
 //! 5. [`calibrate`]: GA+SA, the polish, the load-free stiffness fit.
@@ -24,6 +26,7 @@
 pub mod app;
 pub mod calibrate;
 pub mod cli;
+pub mod gpu;
 pub mod io;
 pub mod mechanics;
 pub mod render;

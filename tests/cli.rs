@@ -353,6 +353,15 @@ fn bad_input_gets_one_clear_line_and_exit_code_1() {
         }
         assert!(msg.matches("os error").count() <= 1, "{args:?}: the OS error twice: {msg}");
     }
+    // compute "gpu" where no adapter computes (DirectX 12 is not built in on Linux): one line.
+    let script = dir.path().join("gpu.json");
+    std::fs::write(&script, r#"{"object":"A","compute":"gpu","actions":[{"wait":{"duration_s":0.01}}]}"#)
+        .expect("write");
+    let r = run_env(&["simulate", "--script", &m(&script), "--out", o], &[("WGPU_BACKEND", "dx12")], &[]);
+    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    let msg = stderr(&r);
+    assert!(msg.contains("no GPU adapter that computes") && msg.trim_end().lines().count() == 1, "{msg}");
+    assert!(!out.exists());
     // A window system that does not answer: say so, name the headless commands, no source paths.
     let r = run_env(&["view", "--frames", "1"], &[("DISPLAY", ":97")], &["WAYLAND_DISPLAY"]);
     assert_eq!(r.status.code(), Some(1));

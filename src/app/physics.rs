@@ -285,7 +285,11 @@ impl Loop {
                     *sim = Simulation::with_tissue(tissue, Integrator::Symplectic, r.dt, Some(&r.case));
                     self.attach_surface_probe(sim);
                     self.glide = None;
-                    self.note = sim.set_integrator(r.integrator, r.dt);
+                    let note = sim.set_integrator(r.integrator, r.dt);
+                    self.note = match (note, sim.tissue.computed_on()) {
+                        (Some(n), Some(on)) => Some(format!("{n}; {on}")),
+                        (n, on) => n.or(on),
+                    };
                     self.message = None;
                     self.owed = 0.0;
                 }

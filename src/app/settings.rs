@@ -57,6 +57,8 @@ pub struct ViewSettings {
     pub calib_cases: CaseSet,
     /// Nodes per edge of the model's grid (the resolution).
     pub nodes: usize,
+    /// Where the model's steps are computed.
+    pub compute: crate::gpu::Compute,
 }
 
 impl Default for ViewSettings {
@@ -69,6 +71,7 @@ impl Default for ViewSettings {
             colour: ColourMode::Displacement,
             show_springs: false,
             show_nodes: false,
+            compute: crate::gpu::Compute::Cpu,
             show_fixed: true,
             case_axis: 1,
             case_force: 10.0,

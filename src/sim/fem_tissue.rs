@@ -4,6 +4,7 @@
 //! The FEM's state is interleaved (`3 node + component`); the simulation's is node-wise. The
 //! node-wise copy is the state between steps, and a step copies it in and out (no allocation).
 
+use super::explicit_form::{ExplicitForm, ForceForm};
 use super::integrator::Integrator;
 use super::tissue::Tissue;
 use crate::mechanics::cases::LoadCase;
@@ -92,6 +93,22 @@ fn fem_dt_limit(model: &FemModel, density: f64, alpha: f64) -> f64 {
 }
 
 impl Tissue for FemTissue {
+    fn explicit_form(&self) -> Result<ExplicitForm, String> {
+        let d = &self.dynamics;
+        if d.formulation != Formulation::Linear {
+            return Err("the corotational FEM has no GPU step (its rotations are per element): \
+                        the lattices and the linear FEM have one"
+                .into());
+        }
+        let nn = self.free.len();
+        Ok(ExplicitForm {
+            grid: d.model.grid,
+            force: ForceForm::Stencil(d.model.stencil().blocks().to_vec()),
+            inv_mass: (0..nn).map(|p| 1.0 / d.mass[3 * p]).collect(),
+            damping_rate: vec![d.alpha; nn],
+            free: std::array::from_fn(|c| (0..nn).map(|p| d.free[3 * p + c]).collect()),
+        })
+    }
     fn modal(&self) -> Result<crate::response::modal::ModalModel, String> {
         Ok(crate::response::modal::ModalModel::fem(&self.dynamics.model, self.density))
     }

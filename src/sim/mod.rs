@@ -7,10 +7,12 @@
 //!   one integrator vocabulary ([`Integrator`]) and the step policy.
 //! - [`tissue`]: the seam ([`Tissue`]); [`msm_tissue`] and [`fem_tissue`]: the lattices and the
 //!   FEM behind it; [`shipped`]: the calibrated tissues in `assets/`.
+//! - [`explicit_form`]: a model's explicit step as plain numbers (what the GPU's step runs).
 //! - [`tool`]: drag and probe; [`simulation`]: the running tissue, its tools and its guard.
 //!
 //! May use: [`crate::response`], [`crate::mechanics`], [`crate::io`].
 
+pub mod explicit_form;
 pub mod fem_tissue;
 pub mod integrator;
 pub mod modal_lag;

@@ -1,5 +1,6 @@
 //! The mass-spring lattices as a [`Tissue`].
 
+use super::explicit_form::{ExplicitForm, FamilyForm, ForceForm};
 use super::integrator::Integrator;
 use super::tissue::Tissue;
 use crate::mechanics::cases::LoadCase;
@@ -51,6 +52,29 @@ impl MsmTissue {
 }
 
 impl Tissue for MsmTissue {
+    fn explicit_form(&self) -> Result<ExplicitForm, String> {
+        let model = &self.model;
+        let h = model.grid.h();
+        let force = ForceForm::Springs(
+            model
+                .families
+                .iter()
+                .map(|f| FamilyForm {
+                    offset: f.offset,
+                    rest: f.family.offset.map(|o| f64::from(o) * h),
+                    rest_length: f.rest_length,
+                    stiffness: f.stiffness.clone(),
+                })
+                .collect(),
+        );
+        Ok(ExplicitForm {
+            grid: model.grid,
+            force,
+            inv_mass: model.masses.iter().map(|m| 1.0 / m).collect(),
+            damping_rate: model.damping.iter().zip(&model.masses).map(|(c, m)| c / m).collect(),
+            free: std::array::from_fn(|_| self.dynamics.free.clone()),
+        })
+    }
     fn modal(&self) -> Result<crate::response::modal::ModalModel, String> {
         crate::response::modal::ModalModel::lattice(&self.model)
     }

@@ -57,4 +57,10 @@ pub trait Tissue: Send + std::fmt::Debug {
     fn damping(&self) -> Damping;
     /// Its rest stiffness and masses (its small-displacement dynamics), or why it has none.
     fn modal(&self) -> Result<crate::response::modal::ModalModel, String>;
+    /// Where its steps run when not on this CPU (the GPU's adapter), in words.
+    fn computed_on(&self) -> Option<String> {
+        None
+    }
+    /// Its symplectic Euler step as plain numbers (for the GPU's step), or why it has none.
+    fn explicit_form(&self) -> Result<super::explicit_form::ExplicitForm, String>;
 }

@@ -4,6 +4,7 @@
 mod calibration;
 mod dynamics;
 mod fem_reference;
+mod gpu_step;
 mod msm_statics;
 mod probe_material;
 mod stability;

@@ -14,6 +14,7 @@ fn script(actions: Vec<Action>) -> Script {
         nodes: 8,
         // The model's own node contact: these tests check that no node ends inside the sphere.
         contact: tissue_sim::study::script::Contact::Nodes,
+        compute: tissue_sim::gpu::Compute::Cpu,
         actions,
     }
 }

@@ -2,6 +2,7 @@
 //! its parameters, edited live.
 
 use crate::app::state::{Request, Shown, ViewSettings};
+use crate::gpu::Compute;
 use crate::mechanics::fem::dynamics::Formulation;
 use crate::mechanics::msm::Topology;
 use crate::sim::Model;
@@ -63,6 +64,23 @@ fn resolution(ui: &mut egui::Ui, settings: &mut ViewSettings, requests: &mut Vec
     );
 }
 
+fn compute(ui: &mut egui::Ui, settings: &mut ViewSettings, requests: &mut Vec<Request>) {
+    ui.horizontal(|ui| {
+        ui.label("compute:");
+        for c in [Compute::Cpu, Compute::Gpu] {
+            if ui.radio_value(&mut settings.compute, c, c.name()).changed() {
+                requests.push(Request::SetCompute);
+            }
+        }
+    });
+    if settings.compute == Compute::Gpu {
+        ui.label(
+            "Symplectic steps of the lattices and the linear FEM run as compute shaders in f32; implicit steps and \
+             the corotational FEM stay on the CPU.",
+        );
+    }
+}
+
 /// Draws the section.
 pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, requests: &mut Vec<Request>) {
     let mut reload = false;
@@ -98,6 +116,7 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
         pick(ui, Model::Fem(Formulation::Corotational), "FEM corotational");
     });
     resolution(ui, settings, requests);
+    compute(ui, settings, requests);
     validation(ui, shown, requests);
     if shown.fem.is_some() {
         ui.label(

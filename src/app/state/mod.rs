@@ -33,6 +33,8 @@ pub enum Request {
     SelectTopology(Topology),
     /// Another resolution: the model on a grid of this many nodes per edge.
     SetResolution(usize),
+    /// The model's steps on the CPU or the GPU ([`ViewSettings::compute`]).
+    SetCompute,
     /// The FEM in place of the lattice.
     SelectFem(crate::mechanics::fem::dynamics::Formulation),
     /// Solve the FEM's force for the probe's current position (in the background).
@@ -92,8 +94,19 @@ pub fn bottom_clamp(grid: &Grid) -> LoadCase {
 }
 
 /// The recipe of the running model for the physics thread: the lattice with `params`, or the FEM.
-fn recipe(model: Model, grid: Grid, material: Material, params: MsmParams, zeta: f64) -> super::physics::TissueRecipe {
-    Box::new(move || model.build_on(grid, &material, Some(params), zeta).map_err(|e| format!("{e:#}")))
+/// On the GPU ([`crate::gpu::Compute`]) its symplectic steps run as compute shaders.
+fn recipe(
+    model: Model,
+    grid: Grid,
+    material: Material,
+    params: MsmParams,
+    zeta: f64,
+    compute: crate::gpu::Compute,
+) -> super::physics::TissueRecipe {
+    Box::new(move || {
+        let tissue = model.build_on(grid, &material, Some(params), zeta).map_err(|e| format!("{e:#}"))?;
+        compute.place(tissue).map_err(|e| format!("compute \"{}\": {e}", compute.name()))
+    })
 }
 
 impl ViewerState {
@@ -157,6 +170,7 @@ impl ViewerState {
                 self.shown.material.clone(),
                 self.shown.params,
                 self.shown.damping_ratio,
+                self.settings.compute,
             ),
             integrator: self.shown.integrator,
             dt: self.shown.dt,
@@ -187,6 +201,7 @@ impl ViewerState {
             }
             Request::FemProbeForce => self.start_fem_probe(),
             Request::SetResolution(n) => self.set_resolution(n, send),
+            Request::SetCompute => send(Command::Replace(self.replacement())),
             Request::EditParams(p) => {
                 let p = p.with_ties(self.shown.material.is_transversely_isotropic());
                 self.shown.params = p;
@@ -393,6 +408,22 @@ mod tests {
         assert!(state.shown.params.k1 < at8.k1, "{:?} vs {at8:?}", state.shown.params);
         state.handle(Request::SetResolution(1), &mut send);
         assert_eq!(state.grid().n(), 12, "an impossible grid is refused");
+    }
+
+    #[test]
+    fn the_gpu_steps_the_model_when_asked() {
+        if crate::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none() {
+            return; // CI has software Vulkan
+        }
+        let (mut state, physics) = started();
+        let mut send = |c| physics.send(c).expect("physics runs");
+        state.settings.compute = crate::gpu::Compute::Gpu;
+        state.handle(Request::SetCompute, &mut send);
+        let p = wait_until(&physics, |p| p.note.as_deref().is_some_and(|n| n.contains("GPU")));
+        assert!(p.note.as_deref().is_some_and(|n| n.contains("on the GPU")), "{:?}", p.note);
+        let t0 = p.time_s;
+        let p = wait_until(&physics, |p| p.time_s > t0 + 0.01);
+        assert!(p.time_s > t0 + 0.01 && p.message.is_none(), "{:?}", p.message);
     }
 
     #[test]

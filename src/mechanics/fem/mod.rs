@@ -69,6 +69,11 @@ impl FemModel {
         }
     }
 
+    /// `K` as a stencil of 3x3 blocks ([`stencil`]).
+    pub fn stencil(&self) -> &stencil::Stencil {
+        &self.stencil
+    }
+
     /// `out = K u` over all degrees of freedom, by the stencil ([`stencil`]). Allocates nothing.
     pub fn apply(&self, u: &[f64], out: &mut [f64]) {
         self.stencil.apply(u, out);

@@ -66,6 +66,13 @@ impl Stencil {
         Self { n, blocks }
     }
 
+    /// `blocks()[class][offset]`: the 3x3 block (row-major) coupling a node of `class` (`sx + 3 sy
+    /// + 9 sz`, each side 0 on the low face, 1 inside, 2 on the high face) with its neighbour at
+    /// `offset = (dx + 1) + 3 (dy + 1) + 9 (dz + 1)`.
+    pub fn blocks(&self) -> &[[[f64; 9]; 27]] {
+        &self.blocks
+    }
+
     /// `out = K u`, interleaved (`3 node + component`). Allocates nothing.
     pub fn apply(&self, u: &[f64], out: &mut [f64]) {
         let n = self.n;

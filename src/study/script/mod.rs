@@ -22,6 +22,9 @@
 //! are projected out of the sphere). `nodes` is the grid's nodes per axis (default 8, the viewer's; 4 to [`MAX_SCRIPT_NODES`]): a
 //! lattice takes its shipped 8^3 tissue carried to that grid
 //! ([`crate::sim::shipped::msm_params_at`]), and `drag`'s node ids are on that grid.
+//! `compute` is `cpu` (default) or `gpu`: the lattices' and the linear FEM's symplectic Euler
+//! step as wgpu compute shaders in f32 ([`crate::gpu`]); without an adapter that computes, or for
+//! a model or integrator it has no step for, the run stops with a one-line error.
 //! `damping_ratio` is the ratio at the fundamental (mass-proportional, see
 //! [`crate::response::damping`]; default 0.2; not for the axis lattice, which keeps the paper's
 //! nodal `d`). `clamp` is `bottom` (face z = 0 held, the viewer's default), `none`, or a case id such as
@@ -53,6 +56,7 @@ pub use path::{PathKey, PathSample};
 use check::{check_script, check_steps, drag_nodes};
 use serde::{Deserialize, Serialize};
 
+use crate::gpu::Compute;
 use crate::mechanics::cases::{LoadCase, parse_case_id};
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
@@ -84,6 +88,10 @@ pub struct Script {
     /// The probe's contact (default `surface`, the viewer's).
     #[serde(default)]
     pub contact: Contact,
+    /// Where the steps are computed: `cpu` (default) or `gpu` (symplectic Euler of the lattices
+    /// and the linear FEM in f32, [`crate::gpu`]).
+    #[serde(default)]
+    pub compute: Compute,
     /// The actions, in order.
     pub actions: Vec<Action>,
 }
@@ -251,6 +259,8 @@ pub struct Outcome {
     pub nodes_per_axis: usize,
     /// The probe's contact.
     pub contact: Contact,
+    /// Where the steps were computed.
+    pub compute: Compute,
     /// Steps taken.
     pub steps: u64,
     /// One event per action.
@@ -294,6 +304,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     }
     let zeta = script.damping_ratio.unwrap_or(crate::response::damping::DEFAULT_DAMPING_RATIO);
     let tissue = script.model.build_on(grid, &material, None, zeta).map_err(|e| anyhow::anyhow!("script: {e:#}"))?;
+    let tissue = script.compute.place(tissue).map_err(|e| anyhow::anyhow!("script: compute \"gpu\": {e}"))?;
     let case = clamp_case(&grid, &material.name, &script.clamp)?;
     let mut sim = Simulation::with_tissue(tissue, Integrator::Symplectic, script.dt, case.as_ref());
     // The viewer's step policy, with the script's drags in it: refused before the first step.
@@ -302,6 +313,14 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         anyhow::anyhow!("script: {why}; lower dt, or leave \"integrator\" out (the automatic choice substeps dt)")
     })?;
     let integrator = sim.integrator;
+    if script.compute == Compute::Gpu && integrator != Integrator::Symplectic {
+        anyhow::bail!(
+            "script: compute \"gpu\" steps with symplectic Euler only, and at dt {} s the step policy chose {}: \
+             lower dt, or set \"integrator\": \"symplectic\"",
+            crate::io::num(script.dt),
+            integrator.name()
+        );
+    }
     check_steps(script, sim.dt)?;
     let probes = script.actions.iter().any(|a| matches!(a, Action::Probe { .. } | Action::ProbePath { .. }));
     if script.contact == Contact::Surface && probes {
@@ -323,6 +342,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         note,
         nodes_per_axis: grid.n(),
         contact: script.contact,
+        compute: script.compute,
         steps: 0,
         events: Vec::new(),
         force_depth: Vec::new(),

@@ -1,0 +1,126 @@
+// One symplectic Euler step of a spring lattice or of the linear FEM, in f32 (tissue-sim's
+// `gpu::explicit`). The state is the displacement from rest `u = x - X` and the velocity `v`,
+// component-major: `state[c nn + p]` is u, `state[3 nn + c nn + p]` is v. A step is two
+// dispatches: `*_velocity` (one thread a node) computes the node's force from `u` and writes
+// `v' = (v + dt ((f + f_ext) / m - c v)) free`; `advance_positions` (one thread a component)
+// writes `u' = u + dt v'`.
+
+struct Family {
+    // Linear node offset of a pair `(p, p + offset)`; pairs exist for `p < len`.
+    offset: u32,
+    len: u32,
+    // Where the family's stiffness starts in `op`.
+    start: u32,
+    rest_length: f32,
+    // The rest vector from the first node of a pair to the second (w unused).
+    rest: vec4<f32>,
+}
+
+struct Params {
+    nn: u32,
+    n: u32,
+    families: u32,
+    dt: f32,
+    family: array<Family, 16>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read_write> state: array<f32>;
+@group(0) @binding(2) var<storage, read> f_ext: array<f32>;
+// `1 / m` of each node, then `c / m` of each node, then free (1 or 0) per component.
+@group(0) @binding(3) var<storage, read> coef: array<f32>;
+// The lattice's stiffness per family and pair, or the FEM's stencil (27 classes x 27 blocks x 9).
+@group(0) @binding(4) var<storage, read> op: array<f32>;
+
+fn displacement(p: u32) -> vec3<f32> {
+    let nn = params.nn;
+    return vec3<f32>(state[p], state[nn + p], state[2u * nn + p]);
+}
+
+// The force of the spring of `fam` starting at node `p` on that node.
+fn pair_force(fam: Family, p: u32) -> vec3<f32> {
+    let k = op[fam.start + p];
+    let d = fam.rest.xyz + displacement(p + fam.offset) - displacement(p);
+    let l = max(length(d), 1e-30);
+    return (k - k * fam.rest_length / l) * d;
+}
+
+fn update_velocity(q: u32, force: vec3<f32>) {
+    let nn = params.nn;
+    let dt = params.dt;
+    let inv_m = coef[q];
+    let rate = coef[nn + q];
+    for (var c = 0u; c < 3u; c++) {
+        let i = c * nn + q;
+        let v = state[3u * nn + i];
+        let vn = (v + dt * (inv_m * (force[c] + f_ext[i]) - rate * v)) * coef[2u * nn + i];
+        state[3u * nn + i] = vn;
+    }
+}
+
+@compute @workgroup_size(64)
+fn lattice_velocity(@builtin(global_invocation_id) id: vec3<u32>) {
+    let q = id.x;
+    if q >= params.nn {
+        return;
+    }
+    var f = vec3<f32>(0.0);
+    for (var i = 0u; i < params.families; i++) {
+        let fam = params.family[i];
+        if q < fam.len {
+            f += pair_force(fam, q);
+        }
+        if q >= fam.offset && q - fam.offset < fam.len {
+            f -= pair_force(fam, q - fam.offset);
+        }
+    }
+    update_velocity(q, f);
+}
+
+// 0 on the low face, 2 on the high one, 1 inside.
+fn side(i: u32, n: u32) -> u32 {
+    if i == 0u {
+        return 0u;
+    }
+    if i + 1u == n {
+        return 2u;
+    }
+    return 1u;
+}
+
+@compute @workgroup_size(64)
+fn stencil_velocity(@builtin(global_invocation_id) id: vec3<u32>) {
+    let q = id.x;
+    let n = params.n;
+    if q >= params.nn {
+        return;
+    }
+    let ijk = vec3<u32>(q % n, (q / n) % n, q / (n * n));
+    let cls = side(ijk.x, n) + 3u * side(ijk.y, n) + 9u * side(ijk.z, n);
+    var ku = vec3<f32>(0.0);
+    for (var o = 0u; o < 27u; o++) {
+        let d = vec3<i32>(i32(o % 3u), i32((o / 3u) % 3u), i32(o / 9u)) - vec3<i32>(1);
+        let at = vec3<i32>(ijk) + d;
+        if any(at < vec3<i32>(0)) || any(at >= vec3<i32>(i32(n))) {
+            continue;
+        }
+        let u = displacement(u32(at.x) + n * (u32(at.y) + n * u32(at.z)));
+        let b = (cls * 27u + o) * 9u;
+        ku += vec3<f32>(
+            op[b] * u.x + op[b + 1u] * u.y + op[b + 2u] * u.z,
+            op[b + 3u] * u.x + op[b + 4u] * u.y + op[b + 5u] * u.z,
+            op[b + 6u] * u.x + op[b + 7u] * u.y + op[b + 8u] * u.z,
+        );
+    }
+    update_velocity(q, -ku);
+}
+
+@compute @workgroup_size(64)
+fn advance_positions(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    let nn = params.nn;
+    if i >= 3u * nn {
+        return;
+    }
+    state[i] += params.dt * state[3u * nn + i];
+}

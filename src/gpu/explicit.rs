@@ -1,0 +1,332 @@
+//! The explicit step's kernel: a model's [`ExplicitForm`] in GPU buffers, its state in and out,
+//! and any number of steps in one submission.
+//!
+//! The state on the GPU is the displacement from rest and the velocity, in f32 (the displacement
+//! rather than the position keeps f32's relative precision on what changes: a spring's length is
+//! its rest vector plus a difference of displacements).
+
+use super::device::{ComputeDevice, GpuError};
+use crate::sim::explicit_form::{ExplicitForm, ForceForm};
+use wgpu::util::DeviceExt as _;
+
+/// The shader, as built into the program.
+pub const EXPLICIT_STEP_WGSL: &str = include_str!("../../shaders/explicit_step.wgsl");
+
+/// Threads per workgroup (the shader's `@workgroup_size`).
+const WORKGROUP: u32 = 64;
+/// Spring families a lattice may have (the hex lattice has 13).
+const MAX_FAMILIES: usize = 16;
+/// Workgroups one dispatch may have along x (WebGPU's minimum limit).
+const MAX_GROUPS: u32 = 65_535;
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct FamilyGpu {
+    offset: u32,
+    len: u32,
+    start: u32,
+    rest_length: f32,
+    rest: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ParamsGpu {
+    nn: u32,
+    n: u32,
+    families: u32,
+    dt: f32,
+    family: [FamilyGpu; MAX_FAMILIES],
+}
+
+/// A model's explicit step on the GPU.
+#[derive(Debug)]
+pub struct ExplicitKernel {
+    gpu: ComputeDevice,
+    nn: usize,
+    params: ParamsGpu,
+    params_buffer: wgpu::Buffer,
+    state: wgpu::Buffer,
+    f_ext: wgpu::Buffer,
+    coef: wgpu::Buffer,
+    staging: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    velocity: wgpu::ComputePipeline,
+    advance: wgpu::ComputePipeline,
+    /// Host copies: the state (`u` then `v`, component-major) and the load.
+    host_state: Vec<f32>,
+    host_load: Vec<f32>,
+    /// Set by the readback's callback.
+    mapped: std::sync::Arc<std::sync::atomic::AtomicU8>,
+}
+
+fn groups(threads: usize) -> u32 {
+    (threads as u32).div_ceil(WORKGROUP)
+}
+
+fn storage(device: &wgpu::Device, label: &str, data: &[f32], extra: wgpu::BufferUsages) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::cast_slice(data),
+        usage: wgpu::BufferUsages::STORAGE | extra,
+    })
+}
+
+/// The coefficients buffer: `1 / m`, `c / m`, then free per component.
+fn coefficients(form: &ExplicitForm) -> Vec<f32> {
+    let mut coef: Vec<f32> = form.inv_mass.iter().chain(&form.damping_rate).map(|&v| v as f32).collect();
+    for c in 0..3 {
+        coef.extend(form.free[c].iter().map(|&v| v as f32));
+    }
+    coef
+}
+
+/// The parameters and the operator buffer of a form.
+fn operator(form: &ExplicitForm) -> Result<(ParamsGpu, Vec<f32>), GpuError> {
+    let nn = form.grid.num_nodes();
+    let mut params = ParamsGpu {
+        nn: nn as u32,
+        n: form.grid.n() as u32,
+        families: 0,
+        dt: 0.0,
+        family: [bytemuck::Zeroable::zeroed(); MAX_FAMILIES],
+    };
+    let mut op = Vec::new();
+    match &form.force {
+        ForceForm::Springs(families) => {
+            if families.len() > MAX_FAMILIES {
+                return Err(GpuError::Unsupported(format!(
+                    "the GPU step takes at most {MAX_FAMILIES} spring families, this lattice has {}",
+                    families.len()
+                )));
+            }
+            params.families = families.len() as u32;
+            for (slot, f) in params.family.iter_mut().zip(families) {
+                *slot = FamilyGpu {
+                    offset: f.offset as u32,
+                    len: f.stiffness.len() as u32,
+                    start: op.len() as u32,
+                    rest_length: f.rest_length as f32,
+                    rest: [f.rest[0] as f32, f.rest[1] as f32, f.rest[2] as f32, 0.0],
+                };
+                op.extend(f.stiffness.iter().map(|&k| k as f32));
+            }
+        }
+        ForceForm::Stencil(blocks) => op.extend(blocks.iter().flatten().flatten().map(|&v| v as f32)),
+    }
+    Ok((params, op))
+}
+
+/// The bind group layout and the two pipelines of a force form.
+fn pipelines(
+    device: &wgpu::Device,
+    force: &ForceForm,
+) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline, wgpu::ComputePipeline) {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("explicit_step.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(std::borrow::Cow::Borrowed(EXPLICIT_STEP_WGSL)),
+    });
+    let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    };
+    let read = wgpu::BufferBindingType::Storage { read_only: true };
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("explicit step"),
+        entries: &[
+            entry(0, wgpu::BufferBindingType::Uniform),
+            entry(1, wgpu::BufferBindingType::Storage { read_only: false }),
+            entry(2, read),
+            entry(3, read),
+            entry(4, read),
+        ],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("explicit step"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let pipeline = |entry: &str| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    };
+    let velocity = pipeline(match force {
+        ForceForm::Springs(_) => "lattice_velocity",
+        ForceForm::Stencil(_) => "stencil_velocity",
+    });
+    let advance = pipeline("advance_positions");
+    (layout, velocity, advance)
+}
+
+impl ExplicitKernel {
+    /// The step of `form` on `gpu`, at rest, unloaded; what the device refuses is an error.
+    pub fn new(gpu: &ComputeDevice, form: &ExplicitForm) -> Result<Self, GpuError> {
+        let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let built = Self::build(gpu, form);
+        match pollster::block_on(scope.pop()) {
+            Some(e) => Err(GpuError::Device(super::device::one_line(&e.to_string()))),
+            None => built,
+        }
+    }
+
+    fn build(gpu: &ComputeDevice, form: &ExplicitForm) -> Result<Self, GpuError> {
+        let nn = form.grid.num_nodes();
+        if groups(3 * nn) > MAX_GROUPS {
+            return Err(GpuError::Unsupported(format!("{nn} nodes are more than one GPU dispatch covers")));
+        }
+        let device = &gpu.device;
+        let (params, op) = operator(form)?;
+        let limit = device.limits().max_storage_buffer_binding_size as usize;
+        if 4 * op.len().max(6 * nn) > limit {
+            return Err(GpuError::Unsupported(format!("{nn} nodes need more than this GPU's {limit}-byte buffers")));
+        }
+        let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("explicit params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let host_state = vec![0.0f32; 6 * nn];
+        let host_load = vec![0.0f32; 3 * nn];
+        let state = storage(device, "state", &host_state, wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC);
+        let f_ext = storage(device, "f_ext", &host_load, wgpu::BufferUsages::COPY_DST);
+        let coef = storage(device, "coefficients", &coefficients(form), wgpu::BufferUsages::COPY_DST);
+        // A zero-length binding is not allowed: keep one element.
+        let op = storage(device, "operator", if op.is_empty() { &[0.0] } else { &op }, wgpu::BufferUsages::empty());
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("state readback"),
+            size: (4 * 6 * nn) as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let (layout, velocity, advance) = pipelines(device, &form.force);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("explicit step"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: params_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: state.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: f_ext.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: coef.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: op.as_entire_binding() },
+            ],
+        });
+        Ok(Self {
+            gpu: gpu.clone(),
+            nn,
+            params,
+            params_buffer,
+            state,
+            f_ext,
+            coef,
+            staging,
+            bind_group,
+            velocity,
+            advance,
+            host_state,
+            host_load,
+            mapped: Default::default(),
+        })
+    }
+
+    /// Writes the state: positions `x` (displacements from `rest`) and velocities `v`.
+    pub fn write_state(&mut self, rest: &[Vec<f64>; 3], x: &[Vec<f64>; 3], v: &[Vec<f64>; 3]) {
+        let nn = self.nn;
+        for c in 0..3 {
+            for p in 0..nn {
+                self.host_state[c * nn + p] = (x[c][p] - rest[c][p]) as f32;
+                self.host_state[3 * nn + c * nn + p] = v[c][p] as f32;
+            }
+        }
+        self.gpu.queue.write_buffer(&self.state, 0, bytemuck::cast_slice(&self.host_state));
+    }
+
+    /// Writes the external forces, newtons.
+    pub fn write_load(&mut self, f_ext: &[Vec<f64>; 3]) {
+        let nn = self.nn;
+        for c in 0..3 {
+            for (h, f) in self.host_load[c * nn..(c + 1) * nn].iter_mut().zip(&f_ext[c]) {
+                *h = *f as f32;
+            }
+        }
+        self.gpu.queue.write_buffer(&self.f_ext, 0, bytemuck::cast_slice(&self.host_load));
+    }
+
+    /// Rewrites which components are free (a new load case).
+    pub fn write_free(&mut self, form: &ExplicitForm) {
+        self.gpu.queue.write_buffer(&self.coef, 0, bytemuck::cast_slice(&coefficients(form)));
+    }
+
+    /// Submits `steps` steps of `dt` (returns before they finish).
+    pub fn run(&mut self, dt: f64, steps: usize) {
+        if self.params.dt != dt as f32 {
+            self.params.dt = dt as f32;
+            self.gpu.queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
+        }
+        let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let mut pass =
+                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None });
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            for _ in 0..steps {
+                pass.set_pipeline(&self.velocity);
+                pass.dispatch_workgroups(groups(self.nn), 1, 1);
+                pass.set_pipeline(&self.advance);
+                pass.dispatch_workgroups(groups(3 * self.nn), 1, 1);
+            }
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// Waits for the steps submitted and reads the state back into positions `x` (rest plus
+    /// displacement) and velocities `v`.
+    pub fn read_state(
+        &mut self,
+        rest: &[Vec<f64>; 3],
+        x: &mut [Vec<f64>; 3],
+        v: &mut [Vec<f64>; 3],
+    ) -> Result<(), GpuError> {
+        use std::sync::atomic::Ordering;
+        let bytes = (4 * self.host_state.len()) as u64;
+        let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        encoder.copy_buffer_to_buffer(&self.state, 0, &self.staging, 0, bytes);
+        self.gpu.queue.submit([encoder.finish()]);
+        let slice = self.staging.slice(..);
+        self.mapped.store(0, Ordering::Release);
+        let mapped = std::sync::Arc::clone(&self.mapped);
+        slice.map_async(wgpu::MapMode::Read, move |r| mapped.store(if r.is_ok() { 1 } else { 2 }, Ordering::Release));
+        self.gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
+        if self.mapped.load(Ordering::Acquire) != 1 {
+            return Err(GpuError::Readback("the readback buffer did not map".into()));
+        }
+        {
+            let data = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
+            self.host_state.copy_from_slice(bytemuck::cast_slice(&data));
+        }
+        self.staging.unmap();
+        let nn = self.nn;
+        for c in 0..3 {
+            for p in 0..nn {
+                x[c][p] = rest[c][p] + f64::from(self.host_state[c * nn + p]);
+                v[c][p] = f64::from(self.host_state[3 * nn + c * nn + p]);
+            }
+        }
+        Ok(())
+    }
+
+    /// Waits until the GPU has finished everything submitted.
+    pub fn finish(&self) -> Result<(), GpuError> {
+        self.gpu
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Readback(e.to_string()))
+    }
+}

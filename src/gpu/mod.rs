@@ -1,0 +1,46 @@
+//! Layer 3b, the GPU's step: the lattices' and the linear FEM's symplectic Euler step as wgpu
+//! compute shaders (`shaders/explicit_step.wgsl`), in f32, behind the same seam as the CPU's
+//! ([`crate::sim::Tissue`]). The simulation, its tools and its guard do not know which runs.
+//!
+//! - [`device`]: an adapter that computes, or a one-line reason why there is none.
+//! - [`explicit`]: the kernel: buffers, pipelines, steps, state in and out.
+//! - [`tissue`]: [`GpuTissue`], a CPU tissue whose symplectic steps run on the GPU.
+//!
+//! May use: [`crate::sim`], [`crate::response`], [`crate::mechanics`], [`crate::io`].
+
+pub mod device;
+pub mod explicit;
+pub mod tissue;
+
+pub use device::{ComputeDevice, GpuError};
+pub use tissue::GpuTissue;
+
+/// Where a model's steps are computed: `cpu` (the default) or `gpu` (scripts, the viewer).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Compute {
+    /// The CPU, in f64.
+    #[default]
+    Cpu,
+    /// The GPU's compute shaders, in f32 (symplectic Euler only).
+    Gpu,
+}
+
+impl Compute {
+    /// `cpu` or `gpu`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Compute::Cpu => "cpu",
+            Compute::Gpu => "gpu",
+        }
+    }
+
+    /// `tissue` as it runs here: itself on the CPU, or wrapped to step on the GPU (opening an
+    /// adapter; a one-line error where none computes or the model has no GPU step).
+    pub fn place(self, tissue: Box<dyn crate::sim::Tissue>) -> Result<Box<dyn crate::sim::Tissue>, GpuError> {
+        match self {
+            Compute::Cpu => Ok(tissue),
+            Compute::Gpu => Ok(Box::new(GpuTissue::new(&ComputeDevice::open()?, tissue)?)),
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! The GPU's explicit step (wgpu compute, f32) against the CPU's (f64) on whatever adapter exists
+//! (software Vulkan, Mesa lavapipe, in CI): the same script gives the same trajectory.
+
+use tissue_sim::study::script::{Outcome, Script, run};
+
+/// Relative tolerance on positions: the largest distance between the two runs' nodes over the
+/// largest displacement. f32 carries about 6e-8 of a spring's length; over 700 steps the runs
+/// part by 1e-5 of the displacement (measured: 7.5e-6 on the hex lattice, 4.8e-6 on the FEM).
+const TOLERANCE: f64 = 1e-4;
+
+fn script(model: &str, nodes: usize, compute: &str) -> Script {
+    serde_json::from_value(serde_json::json!({
+        "object": "A", "model": model, "dt": 1e-4, "compute": compute, "contact": "nodes", "nodes": nodes,
+        "actions": [
+            { "drag": { "node": nodes * nodes * nodes - 1, "to": [0.11, 0.1, 0.12], "duration_s": 0.03 } },
+            { "release": {} },
+            { "probe": { "at": [0.05, 0.05, 0.1], "direction": [0, 0, -1], "radius": 0.015, "depth": 0.004,
+                         "duration_s": 0.02, "samples": 4 } },
+            { "wait": { "duration_s": 0.02 } }
+        ]
+    }))
+    .expect("a valid script")
+}
+
+fn final_positions(o: &Outcome) -> &[[f64; 3]] {
+    o.events.last().and_then(|e| e.positions.as_deref()).expect("the last event has positions")
+}
+
+#[test]
+fn the_gpu_step_follows_the_cpu_step() {
+    if tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none() {
+        eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
+        return;
+    }
+    for (model, nodes) in [("hex", 8), ("shear", 8), ("axis", 8), ("fem-linear", 8), ("hex", 11), ("fem-linear", 11)] {
+        let cpu = run(&script(model, nodes, "cpu")).expect("the CPU run");
+        let gpu = run(&script(model, nodes, "gpu")).expect("the GPU run");
+        assert_eq!(gpu.steps, cpu.steps);
+        let scale = cpu.events.iter().map(|e| e.max_displacement_m).fold(0.0, f64::max);
+        let apart = final_positions(&cpu)
+            .iter()
+            .zip(final_positions(&gpu))
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0, f64::max);
+        assert!(scale > 1e-4, "{model} {nodes}^3 moved only {scale} m");
+        assert!(apart <= TOLERANCE * scale, "{model} {nodes}^3: the runs part by {apart} m of {scale} m");
+        let (f_cpu, f_gpu) = (cpu.force_depth.last().expect("samples"), gpu.force_depth.last().expect("samples"));
+        assert!(
+            (f_cpu.force_n - f_gpu.force_n).abs() <= 1e-3 * f_cpu.force_n.abs().max(0.01),
+            "{model} {nodes}^3: probe force {} N on the CPU, {} N on the GPU",
+            f_cpu.force_n,
+            f_gpu.force_n
+        );
+    }
+}
+
+#[test]
+fn the_gpu_refuses_what_it_has_no_step_for() {
+    if tissue_sim::gpu::ComputeDevice::open().is_err() {
+        return; // the missing adapter's own error is the CLI test's
+    }
+    let err = run(&script("fem-corotational", 8, "gpu")).expect_err("no GPU step").to_string();
+    assert!(err.contains("corotational") && !err.contains('\n'), "{err}");
+    let mut prefactored = script("hex", 8, "gpu");
+    prefactored.integrator = Some(tissue_sim::sim::Integrator::Prefactored);
+    let err = run(&prefactored).expect_err("symplectic only").to_string();
+    assert!(err.contains("symplectic") && !err.contains('\n'), "{err}");
+}
