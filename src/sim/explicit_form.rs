@@ -1,5 +1,5 @@
 //! A model's symplectic Euler step written out as plain numbers, for a step computed elsewhere
-//! (the GPU's, [`crate::gpu`]): the force operator, each node's inverse mass and damping rate,
+//! (the GPU's, in the layer above): the force operator, each node's inverse mass and damping rate,
 //! and which components are free. No GPU types here; the step it describes is
 //! `v' = (v + dt (f(u) + f_ext) / m - dt c v) free`, `u' = u + dt v'`, with `u = x - X` the
 //! displacement from rest, exactly the lattices' and the linear FEM's CPU step.
