@@ -113,4 +113,23 @@ fn explicit_and_implicit_steps_do_not_allocate() {
     assert!(sim.tool_force[2] > 1.0, "the surface compliance pushes back: {:?}", sim.tool_force);
     let surface = ALLOCATIONS.load(Ordering::Relaxed) - before;
     assert_eq!(surface, 0, "allocations in 200 steps with the probe sliding on the surface compliance");
+    // The FEM's steps on the physics pool (the corotational element loop at 8^3, the linear
+    // stencil's slabs at 16^3): splitting the work over the cores allocates nothing either.
+    use tissue_sim::mechanics::fem::FemModel;
+    use tissue_sim::mechanics::fem::dynamics::{FemDynamics, Formulation};
+    let material = tissue_sim::mechanics::material::Material::object_a();
+    for (n, formulation) in [(8, Formulation::Corotational), (16, Formulation::Linear)] {
+        let grid = Grid::new(n).expect("grid");
+        let mut fem = FemDynamics::new(FemModel::new(grid, &material), material.density, formulation, 10.0);
+        fem.apply_case(&LoadCase::clamped(&grid, "A", 1, 5.0));
+        for _ in 0..5 {
+            fem.step_symplectic(1e-6);
+        }
+        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        for _ in 0..20 {
+            fem.step_symplectic(1e-6);
+        }
+        let parallel = ALLOCATIONS.load(Ordering::Relaxed) - before;
+        assert_eq!(parallel, 0, "allocations in 20 {formulation:?} FEM steps at {n}^3 on the physics pool");
+    }
 }

@@ -49,18 +49,31 @@ struct Evaluator<'a> {
     space: &'a GeneSpace,
     mode: CostMode,
     evaluations: u64,
+    /// One workspace per worker thread, kept from generation to generation (a workspace only
+    /// caches factor patterns: a cost is a pure function of its genes).
+    workspaces: Vec<std::sync::Mutex<Workspace>>,
 }
 
-impl Evaluator<'_> {
+impl<'a> Evaluator<'a> {
     /// Costs of many chromosomes in parallel. A chromosome whose model cannot be solved (a static
     /// solve that does not converge, say) gets an infinite cost: the search moves on without it.
     fn eval_many(&mut self, genes: &[Vec<f64>]) -> Vec<f64> {
         self.evaluations += genes.len() as u64;
         let (problem, space, mode) = (self.problem, self.space, self.mode);
+        let workspaces = &self.workspaces;
         genes
             .par_iter()
-            .map_init(Workspace::default, |ws, g| problem.cost_in(mode, &space.params(g), ws).unwrap_or(f64::INFINITY))
+            .map(|g| {
+                let slot = rayon::current_thread_index().unwrap_or(0) % workspaces.len();
+                let mut ws = workspaces[slot].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                problem.cost_in(mode, &space.params(g), &mut ws).unwrap_or(f64::INFINITY)
+            })
             .collect()
+    }
+
+    fn new(problem: &'a Problem, space: &'a GeneSpace, mode: CostMode) -> Self {
+        let workspaces = (0..rayon::current_num_threads().max(1)).map(|_| Default::default()).collect();
+        Self { problem, space, mode, evaluations: 0, workspaces }
     }
 }
 
@@ -127,7 +140,7 @@ pub fn genetic(
 ) -> SearchOutcome {
     let screen = settings.method == Method::Hybrid;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
-    let mut eval = Evaluator { problem, space, mode: settings.cost, evaluations: 0 };
+    let mut eval = Evaluator::new(problem, space, settings.cost);
     let np = settings.population.max(2);
     let mut pop: Vec<Vec<f64>> = (0..np).map(|_| random_genes(&mut rng, space)).collect();
     let mut cost = eval.eval_many(&pop);
@@ -238,7 +251,7 @@ pub fn annealing(
     on_generation: &mut dyn FnMut(&GenerationStats),
 ) -> SearchOutcome {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
-    let mut eval = Evaluator { problem, space, mode: settings.cost, evaluations: 0 };
+    let mut eval = Evaluator::new(problem, space, settings.cost);
     let mut x = random_genes(&mut rng, space);
     let mut fx = eval.eval_many(std::slice::from_ref(&x))[0];
     let (mut best, mut best_cost) = (x.clone(), fx);

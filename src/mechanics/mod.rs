@@ -5,6 +5,7 @@
 //!   [`displacement_file`]: the spec's JSON of case answers.
 //! - [`sparse`]: faer's sparse Cholesky behind one SPD system type.
 //! - [`fem`]: hex8 statics and dynamics; [`msm`]: the mass-spring lattices, statics and dynamics.
+//! - [`parallel`]: the physics' own thread pool.
 //!
 //! May use: [`crate::io`] only. Knows no simulation, calibration, GPU or command line.
 
@@ -14,4 +15,5 @@ pub mod fem;
 pub mod grid;
 pub mod material;
 pub mod msm;
+pub mod parallel;
 pub mod sparse;

@@ -177,6 +177,26 @@ pub fn predicted_error(integrator: Integrator, h: f64, damping: Damping) -> Opti
     ))
 }
 
+/// The fewest substeps `k <= MAX_AUTO_SUBSTEPS` of `dt` at which `integrator` is stable
+/// ([`StepLimit::auto_allows`]) and, for a model damped by a ratio, meets `budget` on the
+/// fundamental (with no fundamental known, the paper's nodal damping, stability alone decides).
+pub fn fewest_substeps(
+    integrator: Integrator,
+    dt: f64,
+    limit: StepLimit,
+    damping: Damping,
+    budget: DynamicBudget,
+) -> Option<usize> {
+    let budgeted = damping.omega_1().is_some();
+    (1..=MAX_AUTO_SUBSTEPS).find(|&k| {
+        let h = dt / k as f64;
+        limit.auto_allows(integrator, h)
+            && (!budgeted
+                || predicted_error(integrator, h, damping)
+                    .is_some_and(|(p, d)| p <= budget.period && d <= budget.damping))
+    })
+}
+
 /// The step policy: the integrator and step for the step `dt` asked for.
 ///
 /// * An integrator asked for by name runs at `dt`, or is refused ([`StepLimit::refusal`]).
@@ -216,14 +236,8 @@ pub fn choose_step(
         });
         return Ok((i, dt, note));
     }
-    // With no fundamental known (the paper's nodal damping) stability alone decides.
     let budgeted = damping.omega_1().is_some();
-    let first = |i: Integrator| {
-        (1..=MAX_AUTO_SUBSTEPS).find(|&k| {
-            let h = dt / k as f64;
-            limit.auto_allows(i, h) && (!budgeted || meets(i, h))
-        })
-    };
+    let first = |i: Integrator| fewest_substeps(i, dt, limit, damping, budget);
     let choice = match (first(Integrator::Symplectic), first(Integrator::Prefactored)) {
         (Some(e), Some(i)) if i < e => Some((Integrator::Prefactored, i)),
         (Some(e), _) => Some((Integrator::Symplectic, e)),

@@ -32,13 +32,19 @@ pub struct BenchReport {
     pub msm_static_9_cases_newton_s: f64,
     /// Newton on the 9 cases of the shear-spring model.
     pub msm_shear_static_9_cases_newton_s: f64,
-    /// The linear FEM's elastic force `K u`, keyed by nodes per axis: by the stencil (what the
-    /// FEM steps use) and by the element loop (before), seconds.
+    /// The linear FEM's elastic force `K u`, keyed by nodes per axis: by the stencil on one
+    /// thread and by the element loop (before), seconds.
     pub fem_linear_force_s: BTreeMap<usize, (f64, f64)>,
+    /// On one thread and on the physics pool (every core, [`crate::mechanics::parallel`]), keyed
+    /// `linear-force/N` (the stencil's `K u`) and `corotational-step/N` (one symplectic step of
+    /// the corotational FEM), seconds.
+    pub fem_parallel_s: BTreeMap<String, (f64, f64)>,
     /// One 1 ms physics tick of the viewer's scene (face z = 0 clamped, object A, 8^3) with the
     /// probe pressed 4 mm into the top face, keyed by `model/integrator/dt`: the viewer keeps up
     /// with 1 kHz real time when this is below 1 ms.
     pub viewer_tick_with_probe_s: BTreeMap<String, f64>,
+    /// Every model x resolution x integrator ([`crate::study::bench_sweep`]).
+    pub resolution_sweep: super::bench_sweep::Sweep,
 }
 
 /// One 1 ms tick of `model` in the viewer's scene with the probe pressed 4 mm into the top face
@@ -138,9 +144,34 @@ fn fem_linear_force(material: &Material) -> anyhow::Result<BTreeMap<usize, (f64,
         let fem = FemModel::new(Grid::new(n)?, material);
         let u: Vec<f64> = (0..3 * fem.grid.num_nodes()).map(|d| ((d * 7919) % 101) as f64 * 1e-6).collect();
         let mut ku = vec![0.0; u.len()];
-        let stencil = time_per_call(0.3, || fem.apply(std::hint::black_box(&u), &mut ku));
+        let stencil = time_per_call(0.3, || fem.stencil().apply_on(std::hint::black_box(&u), &mut ku, false));
         let elements = time_per_call(0.3, || fem.apply_by_elements(std::hint::black_box(&u), &mut ku));
         out.insert(n, (stencil, elements));
+    }
+    Ok(out)
+}
+
+/// The stencil's `K u` and the corotational FEM's step on one thread and on the physics pool.
+fn fem_parallel(material: &Material) -> anyhow::Result<BTreeMap<String, (f64, f64)>> {
+    use crate::mechanics::fem::dynamics::{FemDynamics, Formulation};
+    let mut out = BTreeMap::new();
+    for n in [8, 16, 32] {
+        let fem = FemModel::new(Grid::new(n)?, material);
+        let u: Vec<f64> = (0..3 * fem.grid.num_nodes()).map(|d| ((d * 7919) % 101) as f64 * 1e-6).collect();
+        let mut ku = vec![0.0; u.len()];
+        let one = time_per_call(0.3, || fem.stencil().apply_on(std::hint::black_box(&u), &mut ku, false));
+        let all = time_per_call(0.3, || fem.stencil().apply_on(std::hint::black_box(&u), &mut ku, true));
+        out.insert(format!("linear-force/{n}"), (one, all));
+        let mut d = FemDynamics::new(fem, material.density, Formulation::Corotational, 0.0);
+        for (x, du) in d.x.iter_mut().zip(&u) {
+            *x += du;
+        }
+        let mut time = |parallel: bool| {
+            d.parallel = parallel;
+            time_per_call(0.3, || d.step_symplectic(1e-9))
+        };
+        let (one, all) = (time(false), time(true));
+        out.insert(format!("corotational-step/{n}"), (one, all));
     }
     Ok(out)
 }
@@ -176,7 +207,7 @@ fn viewer_ticks() -> anyhow::Result<BTreeMap<String, f64>> {
     Ok(viewer_tick_with_probe_s)
 }
 
-/// Runs every benchmark (about 10 s in a release build).
+/// Runs every benchmark (minutes in a release build; the resolution sweep takes most).
 pub fn run() -> anyhow::Result<BenchReport> {
     let mut msm_explicit_step_s = BTreeMap::new();
     let mut msm_shear_explicit_step_s = BTreeMap::new();
@@ -199,6 +230,7 @@ pub fn run() -> anyhow::Result<BenchReport> {
     }
     let material = Material::object_a();
     let fem_linear_force_s = fem_linear_force(&material)?;
+    let fem_parallel_s = fem_parallel(&material)?;
     let grid = Grid::paper();
     let cases = benchmark_cases(&grid, "A", Bc::Clamped);
     let mut err = None;
@@ -227,8 +259,11 @@ pub fn run() -> anyhow::Result<BenchReport> {
     let shear = MsmModel::new(grid, shear_params(), material.density)?;
     let msm_shear_static_9_cases_newton_s = newton(&shear);
     let viewer_tick_with_probe_s = viewer_ticks()?;
+    let resolution_sweep = super::bench_sweep::run()?;
     Ok(BenchReport {
+        resolution_sweep,
         fem_linear_force_s,
+        fem_parallel_s,
         viewer_tick_with_probe_s,
         msm_explicit_step_s,
         msm_shear_explicit_step_s,
@@ -267,6 +302,15 @@ impl BenchReport {
                 elements / stencil
             );
         }
+        for (key, (one, all)) in &self.fem_parallel_s {
+            s += &format!(
+                "{:<40}: {} one thread, {} all cores ({:.2}x)\n",
+                format!("FEM {key}"),
+                us(*one),
+                us(*all).trim(),
+                one / all
+            );
+        }
         s += &format!("{:<46}: {}\n", "FEM static, 9 clamped cases (A, 8^3)", us(self.fem_static_9_cases_s));
         s += &format!("{:<46}: {}\n", "MSM static, 9 cases, closed form", us(self.msm_static_9_cases_s));
         s += &format!("{:<46}: {}\n", "MSM static, 9 cases, Newton (axis)", us(self.msm_static_9_cases_newton_s));
@@ -280,6 +324,7 @@ impl BenchReport {
                 1.0 / t
             );
         }
+        s += &self.resolution_sweep.to_text();
         s
     }
 }

@@ -19,7 +19,9 @@ use std::time::Instant;
 
 pub use super::chart_measure::{ERROR_UNIT_M, sample};
 use super::chart_measure::{MAX_COUPLED_IMPLICIT_N, ProbeFigures, cases, errors, model_points, sampled};
-pub use super::chart_point::{CHART_DAMPING_RATIO, CHARTED, ChartPoint, IMPLICIT_STEPS_S, integrator_chart_name};
+pub use super::chart_point::{
+    CHART_DAMPING_RATIO, CHARTED, ChartPoint, IMPLICIT_STEPS_S, NEWMARK_STEPS_S, integrator_chart_name,
+};
 pub use super::pareto::{crossing, mark_pareto};
 use super::timing::time_per_call;
 use crate::mechanics::fem::FemModel;

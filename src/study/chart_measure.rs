@@ -5,7 +5,7 @@
 use glam::DVec3;
 use std::time::Instant;
 
-use super::chart_point::{ChartPoint, IMPLICIT_STEPS_S};
+use super::chart_point::{ChartPoint, IMPLICIT_STEPS_S, NEWMARK_STEPS_S};
 use crate::mechanics::cases::{CaseSolution, LoadCase};
 use crate::mechanics::fem::FemModel;
 use crate::mechanics::fem::clamped::ClampedSolver;
@@ -92,8 +92,9 @@ impl PointBase<'_> {
     }
 }
 
-/// The chart's points of one model and resolution: an explicit point at 0.9 of `dt_max` and an
-/// implicit point at each of [`IMPLICIT_STEPS_S`] (when the implicit step was timed), each with
+/// The chart's points of one model and resolution: an explicit point at 0.9 of `dt_max`, an
+/// implicit point at each of [`IMPLICIT_STEPS_S`] and a Newmark point at each of
+/// [`NEWMARK_STEPS_S`] (when the implicit step was timed: the same factor and solve), each with
 /// its dynamic measurement where `dynamics` is given (the viewer's 8^3 scene).
 fn points_of(
     shared: &PointBase<'_>,
@@ -108,6 +109,14 @@ fn points_of(
     if let Some((step_s, memory_bytes)) = implicit {
         steppings.extend(IMPLICIT_STEPS_S.iter().map(|&dt_s| Stepping {
             integrator: Integrator::Prefactored,
+            step_s,
+            dt_max_s: f64::INFINITY,
+            dt_s,
+            memory_bytes,
+        }));
+        // Newmark's trapezoidal rule, prefactored like it: one solve per step, no numerical damping.
+        steppings.extend(NEWMARK_STEPS_S.iter().map(|&dt_s| Stepping {
+            integrator: Integrator::Newmark,
             step_s,
             dt_max_s: f64::INFINITY,
             dt_s,

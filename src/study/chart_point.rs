@@ -82,8 +82,8 @@ pub struct ChartPoint {
     /// Largest stable explicit step (`damped_explicit_limit` of `omega_max` and the damping rate), s;
     /// infinite for implicit.
     pub dt_max_s: f64,
-    /// The time step of the point, s: 0.9 of `dt_max_s` (explicit), or one of
-    /// [`IMPLICIT_STEPS_S`] (implicit).
+    /// The time step of the point, s: 0.9 of `dt_max_s` (explicit), one of
+    /// [`IMPLICIT_STEPS_S`] (implicit) or of [`NEWMARK_STEPS_S`] (newmark).
     pub dt_s: f64,
     /// Wall time per simulated second, `step_s / dt_s`, s.
     pub cost_per_sim_s: f64,
@@ -140,6 +140,8 @@ fn not_scored() -> f64 {
 
 /// The steps of the implicit points, s: from 0.1 ms to one frame at 60 Hz.
 pub const IMPLICIT_STEPS_S: [f64; 6] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 1.0 / 60.0];
+/// The steps of the Newmark points, s: the viewer's 1 ms tick.
+pub const NEWMARK_STEPS_S: [f64; 1] = [1e-3];
 /// The damping ratio of every chart point (mass-proportional at each model's fundamental).
 pub const CHART_DAMPING_RATIO: f64 = crate::response::damping::DEFAULT_DAMPING_RATIO;
 

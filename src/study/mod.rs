@@ -2,11 +2,13 @@
 //! measurement of one model [`chart_measure`], [`pareto`] fronts, [`plot`]), the stability study
 //! of explicit integration ([`stability`]), the choice of the smallest model that meets a scene's
 //! error and rate budget ([`choose`]), the paper's tables and figures ([`reproduce`]), timings
-//! ([`timing`], [`bench`](mod@bench)) and scripted interaction ([`script`], `simulate`).
+//! ([`timing`], [`bench`](mod@bench), its [`bench_sweep`] of resolutions) and scripted
+//! interaction ([`script`], `simulate`).
 //!
-//! May use: calibrate, validate, sim, response, mechanics, io.
+//! May use: calibrate, validate, gpu, sim, response, mechanics, io.
 
 pub mod bench;
+pub mod bench_sweep;
 pub mod chart;
 pub mod chart_measure;
 pub mod chart_point;

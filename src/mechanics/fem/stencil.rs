@@ -73,33 +73,54 @@ impl Stencil {
         &self.blocks
     }
 
-    /// `out = K u`, interleaved (`3 node + component`). Allocates nothing.
+    /// `out = K u`, interleaved (`3 node + component`), slab by slab of constant z, the slabs
+    /// split over the physics pool ([`crate::mechanics::parallel`]) on a large enough grid (each
+    /// row the same sum however split). Allocates nothing.
     pub fn apply(&self, u: &[f64], out: &mut [f64]) {
+        self.apply_on(u, out, true);
+    }
+
+    /// [`Stencil::apply`], on the calling thread alone unless `parallel` (the bench's baseline).
+    pub fn apply_on(&self, u: &[f64], out: &mut [f64], parallel: bool) {
+        let n = self.n;
+        let slab = 3 * n * n;
+        let pool = crate::mechanics::parallel::pool()
+            .filter(|_| parallel && n * n * n >= crate::mechanics::parallel::MIN_PARALLEL_ITEMS.max(4096));
+        match pool {
+            Some(pool) => pool.install(|| {
+                use rayon::prelude::*;
+                out.par_chunks_mut(slab).enumerate().for_each(|(k, o)| self.apply_slab(u, k, o));
+            }),
+            None => out.chunks_mut(slab).enumerate().for_each(|(k, o)| self.apply_slab(u, k, o)),
+        }
+    }
+
+    /// The rows of the slab `z = k` into `out` (that slab's part of `K u`).
+    fn apply_slab(&self, u: &[f64], k: usize, out: &mut [f64]) {
         let n = self.n;
         // Dof offsets of the 27 neighbours of an inside node.
         let offsets: [usize; 27] = std::array::from_fn(|o| 3 * ((o % 3) + n * ((o / 3) % 3) + n * n * (o / 9)));
         let inside = &self.blocks[13];
-        for k in 0..n {
-            for j in 0..n {
-                let row_inside = side(j, n) == 1 && side(k, n) == 1;
-                for i in 0..n {
-                    let p = i + n * (j + n * k);
-                    let acc = if row_inside && side(i, n) == 1 {
-                        // All 27 neighbours exist: the first is at (i - 1, j - 1, k - 1).
-                        let first = 3 * (p - 1 - n - n * n);
-                        let mut acc = [0.0; 3];
-                        for (b, &o) in inside.iter().zip(&offsets) {
-                            let v = &u[first + o..first + o + 3];
-                            acc[0] += b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
-                            acc[1] += b[3] * v[0] + b[4] * v[1] + b[5] * v[2];
-                            acc[2] += b[6] * v[0] + b[7] * v[1] + b[8] * v[2];
-                        }
-                        acc
-                    } else {
-                        self.boundary_row(u, [i, j, k])
-                    };
-                    out[3 * p..3 * p + 3].copy_from_slice(&acc);
-                }
+        for j in 0..n {
+            let row_inside = side(j, n) == 1 && side(k, n) == 1;
+            for i in 0..n {
+                let p = i + n * (j + n * k);
+                let acc = if row_inside && side(i, n) == 1 {
+                    // All 27 neighbours exist: the first is at (i - 1, j - 1, k - 1).
+                    let first = 3 * (p - 1 - n - n * n);
+                    let mut acc = [0.0; 3];
+                    for (b, &o) in inside.iter().zip(&offsets) {
+                        let v = &u[first + o..first + o + 3];
+                        acc[0] += b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
+                        acc[1] += b[3] * v[0] + b[4] * v[1] + b[5] * v[2];
+                        acc[2] += b[6] * v[0] + b[7] * v[1] + b[8] * v[2];
+                    }
+                    acc
+                } else {
+                    self.boundary_row(u, [i, j, k])
+                };
+                let at = 3 * (i + n * j);
+                out[at..at + 3].copy_from_slice(&acc);
             }
         }
     }

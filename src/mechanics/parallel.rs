@@ -1,0 +1,21 @@
+//! The physics' own thread pool: the per-element and per-node loops of a step split over the
+//! machine's cores. Its own pool (not rayon's global one, which a background calibration fills),
+//! so a step never waits behind other work's tasks.
+
+use std::sync::OnceLock;
+
+/// Below this many items a loop runs on the calling thread (a parallel split costs microseconds).
+pub const MIN_PARALLEL_ITEMS: usize = 256;
+
+/// The pool, one thread per core; `None` on one core or where no thread can be started.
+pub fn pool() -> Option<&'static rayon::ThreadPool> {
+    static POOL: OnceLock<Option<rayon::ThreadPool>> = OnceLock::new();
+    POOL.get_or_init(|| {
+        let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+        if cores < 2 {
+            return None;
+        }
+        rayon::ThreadPoolBuilder::new().num_threads(cores).thread_name(|i| format!("physics-{i}")).build().ok()
+    })
+    .as_ref()
+}

@@ -1,0 +1,282 @@
+//! `bench`'s resolution sweep: the viewer's 1 ms tick with the probe pressed, for every model x
+//! resolution x integrator, each integrator at the fewest substeps that keep it stable and inside
+//! the dynamic budget ([`crate::sim::fewest_substeps`]), and which of them the automatic choice
+//! takes; the largest resolution each model runs at 1 kHz; and the GPU's own step where an
+//! adapter computes.
+//!
+//! The scene is the viewer's: object A held by its bottom face, the lattice's shipped tissue
+//! carried to the grid, damping ratio 0.2, and the 15 mm probe pressed 4 mm into the top face
+//! with the material's surface compliance ([`time_tick`] says how).
+
+use std::collections::BTreeMap;
+
+use crate::gpu::Compute;
+use crate::mechanics::cases::LoadCase;
+use crate::mechanics::grid::Grid;
+use crate::mechanics::material::Material;
+use crate::sim::surface_probe::{MaterialSurface, SurfaceProbe};
+use crate::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, Tissue as _, Tool};
+use crate::study::timing::time_per_call;
+
+/// The resolutions swept, nodes per edge.
+pub const SWEEP_NODES: [usize; 5] = [8, 12, 16, 24, 32];
+/// The integrators swept (the full-tangent implicit step, a factorisation per step, is left out).
+pub const SWEEP_INTEGRATORS: [Integrator; 3] = [Integrator::Symplectic, Integrator::Prefactored, Integrator::Newmark];
+/// The viewer's tick, s.
+const TICK_S: f64 = 1e-3;
+/// How deep the probe presses, m.
+const PROBE_DEPTH_M: f64 = 0.004;
+
+/// One model x resolution x integrator.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SweepTick {
+    /// `hex`, ..., `fem-corotational`.
+    pub model: String,
+    /// Nodes per edge.
+    pub nodes: usize,
+    /// The integrator.
+    pub integrator: String,
+    /// `cpu` or `gpu`.
+    pub compute: String,
+    /// Substeps of the 1 ms tick that keep it stable and inside the budget (`None`: none up to
+    /// [`crate::sim::MAX_AUTO_SUBSTEPS`] does).
+    pub substeps: Option<usize>,
+    /// Whether the automatic choice takes this integrator and step.
+    pub automatic: bool,
+    /// Wall time of one 1 ms tick, s (`None` where not run; `note` says why).
+    pub tick_s: Option<f64>,
+    /// Why there is no time, if there is none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+/// The sweep's results.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Sweep {
+    /// Every model x resolution x integrator (and the GPU's symplectic step where it runs).
+    pub ticks: Vec<SweepTick>,
+    /// The largest resolution swept at which each model's automatic choice on the CPU ticks in
+    /// under 1 ms (runs at 1 kHz), by model (`None`: not even 8^3).
+    pub largest_1khz_nodes: BTreeMap<String, Option<usize>>,
+    /// The GPU's adapter, or why there is none.
+    pub gpu_adapter: String,
+    /// One GPU step alone (100 steps in one submission, no readback), by `model/nodes`, s.
+    pub gpu_step_s: BTreeMap<String, f64>,
+}
+
+/// The viewer's scene on `grid` for `model`, with the material's surface compliance.
+fn scene(model: Model, grid: Grid, surface: &MaterialSurface, compute: Compute) -> anyhow::Result<Simulation> {
+    let material = Material::object_a();
+    let tissue = model.build_on(grid, &material, None, crate::response::damping::DEFAULT_DAMPING_RATIO)?;
+    let tissue = compute.place(tissue)?;
+    let mut sim =
+        Simulation::with_tissue(tissue, Integrator::Symplectic, TICK_S, Some(&LoadCase::bottom_clamp(&grid, "A")));
+    let zeta = sim.tissue.damping().ratio();
+    sim.set_surface_probe(Some(SurfaceProbe::on(surface, grid, zeta)));
+    Ok(sim)
+}
+
+/// One tick of `integrator` at `substeps`: from rest the probe is pressed to its 4 mm along
+/// `sin^2` over 30 ticks and held for 10 (3 and 2 where one tick takes over 5 ms: far from real
+/// time, the step's cost dominates), then the median of ticks timed one by one over about 0.2 s
+/// (at least 3).
+fn time_tick(sim: &mut Simulation, integrator: Integrator, substeps: usize) -> Result<f64, String> {
+    sim.reset();
+    sim.try_set_integrator(Some(integrator), TICK_S / substeps as f64)?;
+    let r = crate::validate::touch::PROBE_RADIUS_M;
+    let top = crate::mechanics::grid::CUBE_SIDE_M + r;
+    let mut failed = None;
+    let mut tick = |sim: &mut Simulation, depth: f64| {
+        sim.tool = Tool::Probe { centre: [0.03, 0.05, top - depth], radius: r };
+        let start = std::time::Instant::now();
+        for _ in 0..substeps {
+            if let Err(e) = sim.step() {
+                failed.get_or_insert(e.message);
+            }
+        }
+        start.elapsed().as_secs_f64()
+    };
+    let first = tick(sim, 0.0);
+    let (ramp, hold) = if first > 5e-3 { (3, 2) } else { (30, 10) };
+    for i in 1..=ramp {
+        let s = (0.5 * std::f64::consts::PI * i as f64 / ramp as f64).sin();
+        tick(sim, PROBE_DEPTH_M * s * s);
+    }
+    for _ in 0..hold {
+        tick(sim, PROBE_DEPTH_M);
+    }
+    let (mut times, mut spent) = (Vec::new(), 0.0);
+    while times.len() < 3 || (spent < 0.2 && times.len() < 1000) {
+        let t = tick(sim, PROBE_DEPTH_M);
+        spent += t;
+        times.push(t);
+    }
+    times.sort_by(f64::total_cmp);
+    failed.map_or(Ok(times[times.len() / 2]), Err)
+}
+
+/// Every integrator of `model` on `grid` for `compute`.
+fn sweep_model(
+    model: Model,
+    nodes: usize,
+    surface: &MaterialSurface,
+    compute: Compute,
+    ticks: &mut Vec<SweepTick>,
+) -> anyhow::Result<()> {
+    let grid = Grid::new(nodes)?;
+    let mut sim = scene(model, grid, surface, compute)?;
+    let (limit, damping) = (sim.limit(), sim.tissue.damping());
+    let auto = crate::sim::choose_step(None, TICK_S, limit, damping, DEFAULT_DYNAMIC_BUDGET).ok();
+    let integrators: &[Integrator] =
+        if compute == Compute::Gpu { &[Integrator::Symplectic] } else { &SWEEP_INTEGRATORS };
+    for &integrator in integrators {
+        let substeps = crate::sim::fewest_substeps(integrator, TICK_S, limit, damping, DEFAULT_DYNAMIC_BUDGET);
+        let automatic = compute == Compute::Cpu
+            && auto.as_ref().is_some_and(|(i, h, _)| {
+                *i == integrator && substeps.is_some_and(|k| (TICK_S / k as f64 - h).abs() < 1e-15)
+            });
+        let (tick_s, note) = match substeps {
+            None => (
+                None,
+                Some(format!(
+                    "no substep count up to {} is stable and inside the budget",
+                    crate::sim::MAX_AUTO_SUBSTEPS
+                )),
+            ),
+            Some(k) => match time_tick(&mut sim, integrator, k) {
+                Ok(t) => (Some(t), None),
+                Err(e) => (None, Some(e)),
+            },
+        };
+        ticks.push(SweepTick {
+            model: model.name(),
+            nodes,
+            integrator: integrator.name().into(),
+            compute: compute.name().into(),
+            substeps,
+            automatic,
+            tick_s,
+            note,
+        });
+    }
+    Ok(())
+}
+
+/// The GPU's step alone for the hex lattice and the linear FEM at 16^3 to 40^3 (the largest grid).
+fn gpu_steps() -> anyhow::Result<BTreeMap<String, f64>> {
+    let mut out = BTreeMap::new();
+    let material = Material::object_a();
+    let gpu = crate::gpu::ComputeDevice::open()?;
+    for model in [
+        Model::Lattice(crate::mechanics::msm::Topology::Hex),
+        Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear),
+    ] {
+        for nodes in [16, 32, crate::mechanics::grid::MAX_NODES_PER_AXIS] {
+            let grid = Grid::new(nodes)?;
+            // Undamped: the fundamental a damping ratio needs is too large to solve at 64^3.
+            let tissue: Box<dyn crate::sim::Tissue> = match model {
+                Model::Lattice(t) => {
+                    let params = crate::sim::shipped::msm_params_at(&material, t, &grid)?;
+                    let lattice = crate::mechanics::msm::MsmModel::new(grid, params, material.density)?;
+                    Box::new(crate::sim::MsmTissue::new(lattice, material.density))
+                }
+                Model::Fem(f) => Box::new(crate::sim::FemTissue::new(grid, &material, f)),
+            };
+            let dt = 0.5 * tissue.explicit_dt_limit();
+            let mut tissue = crate::gpu::GpuTissue::new(&gpu, tissue)?;
+            tissue.apply_case(&LoadCase::bottom_clamp(&grid, "A"));
+            let steps = 100;
+            let mut failed = None;
+            let t = time_per_call(0.3, || {
+                if let Err(e) = tissue.run_unsynchronised(dt, steps) {
+                    failed.get_or_insert(e);
+                }
+            });
+            if let Some(e) = failed {
+                anyhow::bail!("GPU step of {} at {nodes}^3: {e}", model.name());
+            }
+            out.insert(format!("{}/{nodes}", model.name()), t / steps as f64);
+        }
+    }
+    Ok(out)
+}
+
+/// Runs the sweep (minutes: the 32^3 factorisations and corotational steps dominate).
+pub fn run() -> anyhow::Result<Sweep> {
+    let surface =
+        MaterialSurface::load_or_compute(&Material::object_a(), crate::io::cache_dir().as_deref(), &mut |_| true)?;
+    let gpu = crate::gpu::ComputeDevice::open();
+    let started = std::time::Instant::now();
+    let mut ticks = Vec::new();
+    for model in Model::ALL {
+        for nodes in SWEEP_NODES {
+            let on_gpu = model != Model::Fem(crate::mechanics::fem::dynamics::Formulation::Corotational);
+            for compute in [Compute::Cpu, Compute::Gpu] {
+                if compute == Compute::Gpu && !(gpu.is_ok() && on_gpu) {
+                    continue;
+                }
+                eprintln!(
+                    "bench: {} at {nodes}^3 on the {} ({:.0} s)",
+                    model.name(),
+                    compute.name(),
+                    started.elapsed().as_secs_f64()
+                );
+                if let Err(e) = sweep_model(model, nodes, &surface, compute, &mut ticks) {
+                    // A model that cannot be built here (its damping's fundamental too large
+                    // to factorise): said in each of its rows.
+                    ticks.push(SweepTick {
+                        model: model.name(),
+                        nodes,
+                        integrator: "any".into(),
+                        compute: compute.name().into(),
+                        substeps: None,
+                        automatic: false,
+                        tick_s: None,
+                        note: Some(format!("{e:#}")),
+                    });
+                }
+            }
+        }
+    }
+    let mut largest_1khz_nodes = BTreeMap::new();
+    for model in Model::ALL {
+        let fast = ticks
+            .iter()
+            .filter(|t| t.model == model.name() && t.automatic && t.tick_s.is_some_and(|s| s < TICK_S))
+            .map(|t| t.nodes)
+            .max();
+        largest_1khz_nodes.insert(model.name(), fast);
+    }
+    let (gpu_adapter, gpu_step_s) = match &gpu {
+        Ok(g) => (g.describe(), gpu_steps()?),
+        Err(e) => (e.to_string(), BTreeMap::new()),
+    };
+    Ok(Sweep { ticks, largest_1khz_nodes, gpu_adapter, gpu_step_s })
+}
+
+impl Sweep {
+    /// A human-readable table.
+    pub fn to_text(&self) -> String {
+        let mut s = String::from("viewer 1 ms tick with the probe pressed (A, bottom clamp, surface compliance)\n");
+        for t in &self.ticks {
+            let time = t
+                .tick_s
+                .map_or_else(|| format!("- ({})", t.note.as_deref().unwrap_or("")), |v| format!("{:10.1} us", v * 1e6));
+            let k = t.substeps.map_or("-".into(), |k| k.to_string());
+            let auto = if t.automatic { " [automatic]" } else { "" };
+            s += &format!(
+                "  {:<17} {:>2}^3 {:<12} {} x{k:<3} {time}{auto}\n",
+                t.model, t.nodes, t.integrator, t.compute
+            );
+        }
+        s += "largest resolution at 1 kHz (automatic choice, CPU):\n";
+        for (m, n) in &self.largest_1khz_nodes {
+            s += &format!("  {m:<17} {}\n", n.map_or("below 8^3".into(), |n| format!("{n}^3")));
+        }
+        s += &format!("GPU: {}\n", self.gpu_adapter);
+        for (k, t) in &self.gpu_step_s {
+            s += &format!("  GPU step alone {k:<22} {:10.1} us\n", t * 1e6);
+        }
+        s
+    }
+}
