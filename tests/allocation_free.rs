@@ -113,8 +113,12 @@ fn explicit_and_implicit_steps_do_not_allocate() {
     assert!(sim.tool_force[2] > 1.0, "the surface compliance pushes back: {:?}", sim.tool_force);
     let surface = ALLOCATIONS.load(Ordering::Relaxed) - before;
     assert_eq!(surface, 0, "allocations in 200 steps with the probe sliding on the surface compliance");
-    // The FEM's steps on the physics pool (the corotational element loop at 8^3, the linear
-    // stencil's slabs at 16^3): splitting the work over the cores allocates nothing either.
+    fem_steps_on_the_physics_pool();
+}
+
+/// The FEM's steps on the physics pool (the corotational element loop at 8^3, the linear
+/// stencil's slabs at 16^3): splitting the work over the cores allocates nothing either.
+fn fem_steps_on_the_physics_pool() {
     use tissue_sim::mechanics::fem::FemModel;
     use tissue_sim::mechanics::fem::dynamics::{FemDynamics, Formulation};
     let material = tissue_sim::mechanics::material::Material::object_a();

@@ -201,8 +201,9 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("chart.csv")).expect("chart.csv");
     // 4 charted models (not the paper's axis lattice) x 2 resolutions x (1 explicit + 6 implicit
-    // steps), plus the header.
-    assert_eq!(csv.lines().count(), 57, "{csv}");
+    // steps + 1 Newmark step), plus the header.
+    assert_eq!(csv.lines().count(), 65, "{csv}");
+    assert_eq!(csv.lines().filter(|l| l.contains(",newmark,")).count(), 8, "{csv}");
     assert!(!csv.contains("msm-axis"), "the axis lattice has no held-out score");
     let header = csv.lines().next().expect("header");
     assert!(header.contains("avg_err_pct") && header.contains("force_err_pct"), "{header}");

@@ -34,9 +34,22 @@ pub fn display_available() -> bool {
 
 /// Runs the viewer until its window closes. `frames` stops after that many frames (smoke tests)
 /// and `screenshot` then saves the last 3D view there as PNG.
-pub fn run(frames: Option<u64>, screenshot: Option<std::path::PathBuf>) -> anyhow::Result<()> {
+pub fn run(options: ViewOptions) -> anyhow::Result<()> {
     if !display_available() {
         anyhow::bail!("no display (DISPLAY and WAYLAND_DISPLAY are unset), so the viewer cannot open; {HEADLESS_HINT}");
     }
-    viewer::run(frames, screenshot)
+    viewer::run(options)
+}
+
+/// How the viewer starts.
+#[derive(Debug, Clone, Default)]
+pub struct ViewOptions {
+    /// Close after this many frames (and print the rates once a second).
+    pub frames: Option<u64>,
+    /// After closing, save the final 3D view as PNG here.
+    pub screenshot: Option<std::path::PathBuf>,
+    /// The model to start with (the default tissue where `None`).
+    pub model: Option<crate::sim::Model>,
+    /// Where its steps are computed.
+    pub compute: crate::gpu::Compute,
 }

@@ -55,11 +55,8 @@ struct App {
 }
 
 impl App {
-    fn new(
-        proxy: EventLoopProxy<Wake>,
-        max_frames: Option<u64>,
-        screenshot: Option<std::path::PathBuf>,
-    ) -> anyhow::Result<Self> {
+    fn new(proxy: EventLoopProxy<Wake>, options: super::ViewOptions) -> anyhow::Result<Self> {
+        let super::ViewOptions { frames: max_frames, screenshot, model, compute } = options;
         let egui = egui::Context::default();
         let wake_proxy = proxy.clone();
         egui.set_request_repaint_callback(move |info| {
@@ -69,7 +66,16 @@ impl App {
             }
         });
         let repaint = egui.clone();
-        let (state, first) = ViewerState::new(move || repaint.request_repaint())?;
+        let (mut state, first) = ViewerState::new(move || repaint.request_repaint())?;
+        // The model and compute asked for on the command line, as the panel would ask.
+        let mut requests = Vec::with_capacity(16);
+        state.settings.compute = compute;
+        match model {
+            Some(crate::sim::Model::Fem(f)) => requests.push(Request::SelectFem(f)),
+            Some(crate::sim::Model::Lattice(t)) => requests.push(Request::SelectTopology(t)),
+            None if compute != crate::gpu::Compute::Cpu => requests.push(Request::SetCompute),
+            None => {}
+        }
         let grid = state.grid();
         // The physics thread builds the model from its recipe: none is built here.
         let physics = PhysicsThread::spawn(first).context("cannot start the physics thread")?;
@@ -86,7 +92,7 @@ impl App {
             mesh: SurfaceMesh::new(&grid),
             overlay: Overlay::new(&grid),
             trace: ForceTrace::default(),
-            requests: Vec::with_capacity(16),
+            requests,
             view_rect: egui::Rect::NOTHING,
             max_frames,
             screenshot,
@@ -362,7 +368,7 @@ impl ApplicationHandler<Wake> for App {
 }
 
 /// Opens the window and runs until it closes.
-pub fn run(frames: Option<u64>, screenshot: Option<std::path::PathBuf>) -> anyhow::Result<()> {
+pub fn run(options: super::ViewOptions) -> anyhow::Result<()> {
     // winit's own message names its source files; say what is wrong in the user's terms.
     let event_loop = EventLoop::<Wake>::with_user_event().build().map_err(|_| {
         let display = std::env::var("DISPLAY").or_else(|_| std::env::var("WAYLAND_DISPLAY")).unwrap_or_default();
@@ -372,7 +378,7 @@ pub fn run(frames: Option<u64>, screenshot: Option<std::path::PathBuf>) -> anyho
             super::HEADLESS_HINT
         )
     })?;
-    let mut app = App::new(event_loop.create_proxy(), frames, screenshot)?;
+    let mut app = App::new(event_loop.create_proxy(), options)?;
     event_loop.run_app(&mut app).context("event loop failed")?;
     if let Some(e) = app.error.take() {
         return Err(e);

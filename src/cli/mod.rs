@@ -109,7 +109,7 @@ pub fn main() -> ExitCode {
 /// Runs one parsed command: without one, the interactive viewer.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     let Some(command) = cli.command else {
-        return crate::app::run(None, None);
+        return crate::app::run(crate::app::ViewOptions::default());
     };
     match command {
         Command::Fem(args) => fem::run(args),

@@ -13,9 +13,38 @@ pub struct ViewArgs {
     /// After closing, save the final 3D view (offscreen, 960x540) as PNG.
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
+    /// Start with this model: hex (the default tissue), shear, axis, fem-linear or
+    /// fem-corotational.
+    #[arg(long, value_parser = parse_model)]
+    pub model: Option<crate::sim::Model>,
+    /// Where the model's steps are computed: cpu, or gpu (symplectic steps of the lattices and
+    /// the linear FEM as compute shaders).
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub compute: ComputeArg,
+}
+
+/// `--compute`.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+#[allow(missing_docs)]
+pub enum ComputeArg {
+    Cpu,
+    Gpu,
+}
+
+fn parse_model(s: &str) -> Result<crate::sim::Model, String> {
+    crate::sim::Model::try_from(s.to_owned())
 }
 
 /// Opens the viewer.
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
-    crate::app::run(args.frames, args.screenshot)
+    let compute = match args.compute {
+        ComputeArg::Cpu => crate::gpu::Compute::Cpu,
+        ComputeArg::Gpu => crate::gpu::Compute::Gpu,
+    };
+    crate::app::run(crate::app::ViewOptions {
+        frames: args.frames,
+        screenshot: args.screenshot,
+        model: args.model,
+        compute,
+    })
 }

@@ -37,7 +37,8 @@ pub struct BenchReport {
     pub fem_linear_force_s: BTreeMap<usize, (f64, f64)>,
     /// On one thread and on the physics pool (every core, [`crate::mechanics::parallel`]), keyed
     /// `linear-force/N` (the stencil's `K u`) and `corotational-step/N` (one symplectic step of
-    /// the corotational FEM), seconds.
+    /// the corotational FEM), seconds; and `corotational-step-converged-rotations/N`: one step
+    /// with every rotation iterated to convergence (before) and incrementally (now), one thread.
     pub fem_parallel_s: BTreeMap<String, (f64, f64)>,
     /// One 1 ms physics tick of the viewer's scene (face z = 0 clamped, object A, 8^3) with the
     /// probe pressed 4 mm into the top face, keyed by `model/integrator/dt`: the viewer keeps up
@@ -153,7 +154,7 @@ fn fem_linear_force(material: &Material) -> anyhow::Result<BTreeMap<usize, (f64,
 
 /// The stencil's `K u` and the corotational FEM's step on one thread and on the physics pool.
 fn fem_parallel(material: &Material) -> anyhow::Result<BTreeMap<String, (f64, f64)>> {
-    use crate::mechanics::fem::dynamics::{FemDynamics, Formulation};
+    use crate::mechanics::fem::dynamics::{FemDynamics, Formulation, ROTATION_ITERATIONS};
     let mut out = BTreeMap::new();
     for n in [8, 16, 32] {
         let fem = FemModel::new(Grid::new(n)?, material);
@@ -166,12 +167,23 @@ fn fem_parallel(material: &Material) -> anyhow::Result<BTreeMap<String, (f64, f6
         for (x, du) in d.x.iter_mut().zip(&u) {
             *x += du;
         }
-        let mut time = |parallel: bool| {
-            d.parallel = parallel;
-            time_per_call(0.3, || d.step_symplectic(1e-9))
+        // A drifting state, so that the rotations change every step as they do in use.
+        let mut time = |parallel: bool, iterations: usize| {
+            (d.parallel, d.rotation_iterations) = (parallel, iterations);
+            let mut k = 0usize;
+            time_per_call(0.3, || {
+                k += 1;
+                let phase = (k % 200) as f64 / 200.0;
+                for (i, x) in d.x.iter_mut().enumerate() {
+                    *x += 1e-7 * (phase * std::f64::consts::TAU + i as f64).sin();
+                }
+                d.step_symplectic(1e-9);
+            })
         };
-        let (one, all) = (time(false), time(true));
+        let converged = time(false, 20);
+        let (one, all) = (time(false, ROTATION_ITERATIONS), time(true, ROTATION_ITERATIONS));
         out.insert(format!("corotational-step/{n}"), (one, all));
+        out.insert(format!("corotational-step-converged-rotations/{n}"), (converged, one));
     }
     Ok(out)
 }
@@ -302,13 +314,15 @@ impl BenchReport {
                 elements / stencil
             );
         }
-        for (key, (one, all)) in &self.fem_parallel_s {
+        for (key, (a, b)) in &self.fem_parallel_s {
+            let (first, second) =
+                if key.contains("converged") { ("converged", "incremental") } else { ("one thread", "all cores") };
             s += &format!(
-                "{:<40}: {} one thread, {} all cores ({:.2}x)\n",
+                "{:<40}: {} {first}, {} {second} ({:.2}x)\n",
                 format!("FEM {key}"),
-                us(*one),
-                us(*all).trim(),
-                one / all
+                us(*a),
+                us(*b).trim(),
+                a / b
             );
         }
         s += &format!("{:<46}: {}\n", "FEM static, 9 clamped cases (A, 8^3)", us(self.fem_static_9_cases_s));

@@ -131,10 +131,19 @@ fn linear_fem_fails_under_large_rotation_and_corotational_does_not() {
             fem.x[3 * p] = c - y;
             fem.x[3 * p + 1] = c + x;
         }
-        let force = fem.forces().iter().fold(0.0f64, |a, f| a.max(f.abs()));
+        let force = |fem: &mut FemDynamics| fem.forces().iter().fold(0.0f64, |a, f| a.max(f.abs()));
         match formulation {
-            Formulation::Corotational => assert!(force < 1e-9, "corotational force {force} N on a rigid rotation"),
-            Formulation::Linear => assert!(force > 10.0, "linear force {force} N on a rigid rotation"),
+            Formulation::Corotational => {
+                // The rotations are updated incrementally (two iterations per evaluation from
+                // the last): a sudden quarter turn is caught up in a few evaluations (7 measured),
+                // after which the force is zero to round-off.
+                let evaluations = (1..=10).find(|_| force(&mut fem) < 1e-9);
+                assert!(evaluations.is_some(), "corotational force {} N after 10 evaluations", force(&mut fem));
+            }
+            Formulation::Linear => {
+                let f = force(&mut fem);
+                assert!(f > 10.0, "linear force {f} N on a rigid rotation");
+            }
         }
         // Spin the free cube a quarter turn from rest.
         fem.x.copy_from_slice(&rest);
