@@ -4,7 +4,7 @@
 use tissue_sim::study::script::{Outcome, Script, run};
 
 /// Relative tolerance on positions: the largest distance between the two runs' nodes over the
-/// largest displacement. f32 carries about 6e-8 of a spring's length; over 700 steps the runs
+/// largest displacement. f32 carries about 6e-8 of a spring's length; over 1,000 steps the runs
 /// part by 1e-5 of the displacement (measured: 7.5e-6 on the hex lattice, 4.8e-6 on the FEM).
 const TOLERANCE: f64 = 1e-4;
 
