@@ -163,6 +163,12 @@ pub const DEFAULT_DYNAMIC_BUDGET: DynamicBudget = DynamicBudget { period: 0.02, 
 /// The automatic choice divides the step asked for into at most this many substeps.
 pub const MAX_AUTO_SUBSTEPS: usize = 64;
 
+/// How many symplectic steps the automatic choice counts one prefactored step as worth: a
+/// prefactored step (a force pass and a sparse solve) cost 39x (hex lattice, 8^3) to 100x
+/// (16^3) a symplectic one in `bench`'s resolution sweep, so prefactored Euler is chosen only
+/// where it needs under a tenth of symplectic Euler's substeps.
+pub const PREFACTORED_STEP_COST: usize = 10;
+
 /// What `scheme` at step `h` does to the fundamental of `damping` (`None`: no fundamental known),
 /// as (period error, damping error), or `None` when it does not keep the mode (unstable).
 pub fn predicted_error(integrator: Integrator, h: f64, damping: Damping) -> Option<(f64, f64)> {
@@ -200,10 +206,11 @@ pub fn fewest_substeps(
 /// The step policy: the integrator and step for the step `dt` asked for.
 ///
 /// * An integrator asked for by name runs at `dt`, or is refused ([`StepLimit::refusal`]).
-/// * The automatic choice (`None`) takes the fewest substeps `dt / k` (`k <= MAX_AUTO_SUBSTEPS`)
-///   at which an integrator is stable ([`StepLimit::auto_allows`]: the tissue and the dragging
-///   spring) and, for a model damped by a ratio, meets `budget` on the fundamental; symplectic
-///   Euler wins a tie (its step is the cheaper). When the budget is out of reach, the fewest
+/// * The automatic choice (`None`) takes, for each integrator, the fewest substeps `dt / k`
+///   (`k <= MAX_AUTO_SUBSTEPS`) at which it is stable ([`StepLimit::auto_allows`]: the tissue and
+///   the dragging spring) and, for a model damped by a ratio, meets `budget` on the fundamental
+///   ([`fewest_substeps`]); then the cheaper tick: symplectic Euler unless prefactored Euler
+///   needs under 1 / [`PREFACTORED_STEP_COST`] of its substeps. When the budget is out of reach, the fewest
 ///   stable prefactored substeps, with a note; when even `dt / MAX_AUTO_SUBSTEPS` is unstable, a
 ///   refusal.
 ///
@@ -239,7 +246,7 @@ pub fn choose_step(
     let budgeted = damping.omega_1().is_some();
     let first = |i: Integrator| fewest_substeps(i, dt, limit, damping, budget);
     let choice = match (first(Integrator::Symplectic), first(Integrator::Prefactored)) {
-        (Some(e), Some(i)) if i < e => Some((Integrator::Prefactored, i)),
+        (Some(e), Some(i)) if i * PREFACTORED_STEP_COST < e => Some((Integrator::Prefactored, i)),
         (Some(e), _) => Some((Integrator::Symplectic, e)),
         (None, Some(i)) => Some((Integrator::Prefactored, i)),
         (None, None) => None,

@@ -27,7 +27,8 @@ pub mod tool;
 pub use fem_tissue::FemTissue;
 pub use integrator::{
     AUTO_EXPLICIT_FRACTION, DEFAULT_DYNAMIC_BUDGET, DT_RANGE_S, DynamicBudget, Integrator, MAX_AUTO_SUBSTEPS,
-    MAX_EXPLICIT_FRACTION, StepLimit, check_dt, choose_integrator, choose_step, fewest_substeps, predicted_error,
+    MAX_EXPLICIT_FRACTION, PREFACTORED_STEP_COST, StepLimit, check_dt, choose_integrator, choose_step, fewest_substeps,
+    predicted_error,
 };
 pub use model::Model;
 pub use msm_tissue::{MsmTissue, explicit_dt_limit};

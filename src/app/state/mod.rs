@@ -386,9 +386,14 @@ mod tests {
         let limit = p.dt_limit;
         assert!(limit > 0.0 && limit.is_finite());
         state.handle(Request::SetIntegrator(Some(Integrator::Symplectic), 3.0 * limit), &mut send);
-        let p = wait_until(&physics, |p| p.integrator.is_some_and(|(_, dt)| dt == 3.0 * limit));
-        assert_eq!(p.integrator.map(|(i, _)| i), Some(Integrator::Prefactored));
-        assert!(p.note.as_deref().is_some_and(|n| n.contains("stability limit")), "{:?}", p.note);
+        // It switches to the automatic choice: symplectic substeps, cheaper than one prefactored step.
+        let p = wait_until(&physics, |p| p.note.as_deref().is_some_and(|n| n.contains("stability limit")));
+        assert!(p.note.as_deref().is_some_and(|n| n.contains("automatic choice")), "{:?}", p.note);
+        assert!(
+            p.integrator.is_some_and(|(i, dt)| i == Integrator::Symplectic && dt <= 0.9 * limit),
+            "{:?}",
+            p.integrator
+        );
         // Well below: accepted.
         state.handle(Request::SetIntegrator(Some(Integrator::Symplectic), 0.3 * limit), &mut send);
         let p = wait_until(&physics, |p| p.integrator.is_some_and(|(_, dt)| dt == 0.3 * limit));
