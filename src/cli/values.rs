@@ -2,6 +2,7 @@
 //! the command-line layer.
 
 use crate::calibrate::{CaseSet, CostMode, Method};
+use crate::gpu::Compute;
 use crate::mechanics::cases::Bc;
 use crate::mechanics::fem::dynamics::Formulation;
 use crate::mechanics::msm::Topology;
@@ -72,6 +73,10 @@ value_enum!(Integrator {
     Prefactored => "prefactored", "Linearised backward Euler with the rest tangent factorised once";
     Newmark => "newmark", "Newmark average acceleration (trapezoidal, no numerical damping) with the rest tangent factorised once";
 });
+value_enum!(Compute {
+    Cpu => "cpu", "The CPU, in f64";
+    Gpu => "gpu", "Symplectic steps of the lattices and the linear FEM as wgpu compute shaders, in f32";
+});
 value_enum!(Metric {
     Max => "max", "The worst node (the default: a budget holds everywhere)";
     Avg => "avg", "The average over nodes (the paper's headline figure)";
@@ -101,6 +106,7 @@ mod tests {
         check::<CaseSet>(|v| v.name().into());
         check::<CostMode>(|v| format!("{v:?}").to_lowercase());
         check::<ColourMode>(|v| format!("{v:?}").to_lowercase());
+        check::<Compute>(|v| v.name().into());
         assert_eq!(Metric::value_variants().len(), 2);
         Cli::command().debug_assert();
     }

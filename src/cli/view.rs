@@ -17,18 +17,9 @@ pub struct ViewArgs {
     /// fem-corotational.
     #[arg(long, value_parser = parse_model)]
     pub model: Option<crate::sim::Model>,
-    /// Where the model's steps are computed: cpu, or gpu (symplectic steps of the lattices and
-    /// the linear FEM as compute shaders).
+    /// Where the model's steps are computed.
     #[arg(long, value_enum, default_value = "cpu")]
-    pub compute: ComputeArg,
-}
-
-/// `--compute`.
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-#[allow(missing_docs)]
-pub enum ComputeArg {
-    Cpu,
-    Gpu,
+    pub compute: crate::gpu::Compute,
 }
 
 fn parse_model(s: &str) -> Result<crate::sim::Model, String> {
@@ -37,14 +28,10 @@ fn parse_model(s: &str) -> Result<crate::sim::Model, String> {
 
 /// Opens the viewer.
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
-    let compute = match args.compute {
-        ComputeArg::Cpu => crate::gpu::Compute::Cpu,
-        ComputeArg::Gpu => crate::gpu::Compute::Gpu,
-    };
     crate::app::run(crate::app::ViewOptions {
         frames: args.frames,
         screenshot: args.screenshot,
         model: args.model,
-        compute,
+        compute: args.compute,
     })
 }

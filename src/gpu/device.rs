@@ -32,12 +32,7 @@ impl ComputeDevice {
     /// Opens the default adapter (backends from `WGPU_BACKEND`, else all), high performance
     /// first, with the largest storage buffers it allows.
     pub fn open() -> Result<Self, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            ..Default::default()
-        }))
-        .map_err(|e| GpuError::NoAdapter(one_line(&e.to_string())))?;
+        let adapter = default_adapter().map_err(GpuError::NoAdapter)?;
         let info = adapter.get_info();
         if !adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS) {
             return Err(GpuError::NoAdapter(format!("{} has no compute shaders", info.name)));
@@ -65,6 +60,18 @@ impl ComputeDevice {
     pub fn describe(&self) -> String {
         format!("{} ({:?}, {:?})", self.info.name, self.info.backend, self.info.device_type)
     }
+}
+
+/// The default adapter without a window (backends from `WGPU_BACKEND`, else all), high
+/// performance first, or why there is none (one line): the compute step's and the offscreen
+/// renderer's.
+pub fn default_adapter() -> Result<wgpu::Adapter, String> {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        ..Default::default()
+    }))
+    .map_err(|e| one_line(&e.to_string()))
 }
 
 /// `text` on one line (adapter errors may span several).

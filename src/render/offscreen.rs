@@ -40,12 +40,7 @@ pub struct Headless {
 impl Headless {
     /// Opens the default adapter (backends from `WGPU_BACKEND`, else all).
     pub fn new() -> Result<Self, RenderError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            ..Default::default()
-        }))
-        .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
+        let adapter = crate::gpu::device::default_adapter().map_err(RenderError::NoAdapter)?;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("tissue-sim offscreen"),
             required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
