@@ -401,6 +401,40 @@ fn simulate_writes_compact_bounded_output_and_stops_on_a_persistent_blow_up() {
     assert!(!never.exists());
 }
 
+/// The paper's axis lattice under the viewer's probe: it cannot carry the surface compliance's
+/// contact forces (nothing resists a layer's slide; before, its columns folded over and a node
+/// left the cube 0.66 s into a held 4 mm press), so it shows the press by its own node contact
+/// while the hand feels the material: the force under the hex lattice within 0.1 % (the axis
+/// lattice has no ratio damping, so its force is the static one).
+#[test]
+fn the_axis_lattice_holds_a_press_on_the_materials_surface() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out.json");
+    let mut felt = Vec::new();
+    for model in ["axis", "hex"] {
+        let script = dir.path().join(format!("{model}.json"));
+        std::fs::write(
+            &script,
+            format!(
+                r#"{{"object":"A","model":"{model}","dt":1e-3,"actions":[
+                {{"probe":{{"at":[0.03,0.05,0.1],"direction":[0,0,-1],"radius":0.015,"depth":0.004,
+                  "duration_s":0.1,"samples":2}}}},{{"wait":{{"duration_s":2.0}}}}]}}"#
+            ),
+        )
+        .expect("write");
+        let o = run(&["simulate", "--script", script.to_str().expect("utf8"), "--out", out.to_str().expect("utf8")]);
+        assert!(o.status.success(), "{model}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).expect("read")).expect("json");
+        assert_eq!(v["contact"], "surface");
+        assert_eq!(v["blow_ups"].as_array().map(Vec::len), Some(0), "{model}: {}", v["blow_ups"]);
+        let last = &v["events"][1];
+        let shown = last["max_displacement_m"].as_f64().expect("displacement");
+        assert!(shown > 0.002 && shown < 0.006, "{model}: largest displacement {shown} m under a 4 mm press");
+        felt.push(last["tool_force_n"][2].as_f64().expect("force"));
+    }
+    assert!(felt[0] > 5.0 && (felt[0] - felt[1]).abs() < 1e-3 * felt[1], "{felt:?}");
+}
+
 #[test]
 fn a_probe_path_presses_and_slides_with_the_materials_force_on_any_grid() {
     let dir = tempfile::tempdir().expect("tempdir");

@@ -149,6 +149,9 @@ impl Tissue for GpuTissue {
     fn explicit_form(&self) -> Result<ExplicitForm, String> {
         self.inner.explicit_form()
     }
+    fn carries_contact_loads(&self) -> bool {
+        self.inner.carries_contact_loads()
+    }
     fn computed_on(&self) -> Option<String> {
         Some(format!("symplectic steps on the GPU: {}", self.adapter()))
     }

@@ -58,73 +58,53 @@ pub fn check_dt(dt: f64) -> Result<(), String> {
     }
 }
 
-/// The automatic choice runs symplectic Euler up to this fraction of its stability limit.
-pub const AUTO_EXPLICIT_FRACTION: f64 = 0.5;
+/// The automatic choice runs symplectic Euler up to this fraction of the tissue's stability
+/// limit: a margin under the limit's bound on the rest stiffness (Gershgorin's, itself above the
+/// stiffest mode), for springs stretched by a drag, which stiffen across.
+pub const AUTO_EXPLICIT_FRACTION: f64 = 0.8;
 /// Symplectic Euler, asked for by name, is accepted up to this fraction of its limit.
 pub const MAX_EXPLICIT_FRACTION: f64 = 0.9;
 
-/// The explicit stability limits a step must respect, s: the tissue's (symplectic Euler on its
-/// stiffest mode) and the dragging spring's (an external force, explicit under every integrator;
-/// infinite when no node can be dragged).
+/// The explicit stability limit a step must respect, s: the tissue's (symplectic Euler on its
+/// stiffest mode). The tools do not bound the step: the dragging spring is a split step,
+/// backward Euler on its node ([`crate::sim::drag_velocity_change`]), and the probe's contact
+/// acts on positions or through the material's surface compliance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepLimit {
     /// The tissue's explicit limit, s.
     pub tissue: f64,
-    /// The dragging spring's limit on the lightest node it may hold, s.
-    pub tool: f64,
 }
 
 impl StepLimit {
-    /// Only the tissue's limit (no tool).
+    /// The tissue's limit.
     pub fn tissue(tissue: f64) -> Self {
-        Self { tissue, tool: f64::INFINITY }
+        Self { tissue }
     }
 
-    /// The limit of `integrator`: symplectic Euler steps the tissue and the tool explicitly
-    /// (their squared frequencies add), the implicit schemes the tool only.
+    /// The limit of `integrator`: the tissue's for symplectic Euler, none for the implicit schemes.
     pub fn of(self, integrator: Integrator) -> f64 {
         match integrator {
-            Integrator::Symplectic => 1.0 / (self.tissue.powi(-2) + self.tool.powi(-2)).sqrt(),
-            Integrator::Implicit | Integrator::Prefactored | Integrator::Newmark => self.tool,
+            Integrator::Symplectic => self.tissue,
+            Integrator::Implicit | Integrator::Prefactored | Integrator::Newmark => f64::INFINITY,
         }
     }
 
-    /// Whether the automatic choice may run `integrator` at `h`: stable with a margin
-    /// ([`MAX_EXPLICIT_FRACTION`] of its limit), and symplectic Euler within
-    /// [`AUTO_EXPLICIT_FRACTION`] of the tissue's limit (its accuracy on the stiff modes).
+    /// Whether the automatic choice may run `integrator` at `h`: symplectic Euler within
+    /// [`AUTO_EXPLICIT_FRACTION`] of the tissue's limit, an implicit scheme at any step.
     pub fn auto_allows(self, integrator: Integrator, h: f64) -> bool {
-        h <= MAX_EXPLICIT_FRACTION * self.of(integrator)
-            && (integrator != Integrator::Symplectic || h <= AUTO_EXPLICIT_FRACTION * self.tissue)
+        h <= AUTO_EXPLICIT_FRACTION * self.of(integrator)
     }
 
     /// Why `integrator` at `dt` is refused, if it is: symplectic Euler above
-    /// [`MAX_EXPLICIT_FRACTION`] of its limit, an implicit scheme above the spring's limit.
+    /// [`MAX_EXPLICIT_FRACTION`] of the tissue's limit.
     pub fn refusal(self, integrator: Integrator, dt: f64) -> Option<String> {
-        // Symplectic Euler keeps a margin below its limit; under an implicit scheme the tissue
-        // only steadies the node the spring holds, so the spring's own limit is the bound.
         let limit = self.of(integrator);
-        let (margin, above) = match integrator {
-            Integrator::Symplectic => (MAX_EXPLICIT_FRACTION, format!("{MAX_EXPLICIT_FRACTION} x ")),
-            Integrator::Implicit | Integrator::Prefactored | Integrator::Newmark => (1.0, String::new()),
-        };
-        if dt <= margin * limit {
-            return None;
-        }
-        let dt = crate::io::num(dt);
-        Some(if integrator == Integrator::Symplectic && self.tissue <= self.tool {
+        (dt > MAX_EXPLICIT_FRACTION * limit).then(|| {
             format!(
-                "symplectic Euler at dt = {dt} s is above {MAX_EXPLICIT_FRACTION} x its stability limit of about {} s \
+                "symplectic Euler at dt = {} s is above {MAX_EXPLICIT_FRACTION} x its stability limit of about {} s \
                  for this tissue",
+                crate::io::num(dt),
                 crate::io::num(limit)
-            )
-        } else {
-            format!(
-                "{} at dt = {dt} s is above {above}the stability limit of about {} s of the dragging spring \
-                 ({} N/m, {} N s/m, applied explicitly) on the lightest node it holds",
-                integrator.name(),
-                crate::io::num(limit),
-                super::tool::DRAG_STIFFNESS,
-                super::tool::DRAG_DAMPING
             )
         })
     }
@@ -207,12 +187,10 @@ pub fn fewest_substeps(
 ///
 /// * An integrator asked for by name runs at `dt`, or is refused ([`StepLimit::refusal`]).
 /// * The automatic choice (`None`) takes, for each integrator, the fewest substeps `dt / k`
-///   (`k <= MAX_AUTO_SUBSTEPS`) at which it is stable ([`StepLimit::auto_allows`]: the tissue and
-///   the dragging spring) and, for a model damped by a ratio, meets `budget` on the fundamental
+///   (`k <= MAX_AUTO_SUBSTEPS`) at which it is stable ([`StepLimit::auto_allows`]) and, for a model damped by a ratio, meets `budget` on the fundamental
 ///   ([`fewest_substeps`]); then the cheaper tick: symplectic Euler unless prefactored Euler
-///   needs under 1 / [`PREFACTORED_STEP_COST`] of its substeps. When the budget is out of reach, the fewest
-///   stable prefactored substeps, with a note; when even `dt / MAX_AUTO_SUBSTEPS` is unstable, a
-///   refusal.
+///   needs under 1 / [`PREFACTORED_STEP_COST`] of its substeps. When the budget is out of reach, prefactored
+///   Euler at `dt`, with a note.
 ///
 /// Returns the integrator, the step and a note for the user.
 pub fn choose_step(
@@ -258,7 +236,7 @@ pub fn choose_step(
             100.0 * budget.damping
         )
     } else {
-        "keeps the tissue and the dragging spring stable".to_owned()
+        "keeps the tissue stable".to_owned()
     };
     Ok(match choice {
         Some((i, 1)) => (i, dt, None),
@@ -267,55 +245,38 @@ pub fn choose_step(
             let (h_s, dt_s) = (crate::io::num(h), crate::io::num(dt));
             (i, h, Some(format!("automatic: {} at {h_s} s ({k} substeps of the {dt_s} s asked for) {keeps}", i.name())))
         }
-        None => {
-            // The budget is out of reach: the fewest prefactored substeps the tool allows.
-            let stable = |k: &usize| limit.auto_allows(Integrator::Prefactored, dt / *k as f64);
-            let Some(k) = (1..=MAX_AUTO_SUBSTEPS).find(stable) else {
-                let h = dt / MAX_AUTO_SUBSTEPS as f64;
-                return Err(format!(
-                    "even dt / {MAX_AUTO_SUBSTEPS} = {} s is above {MAX_EXPLICIT_FRACTION} x the stability limit of \
-                     about {} s of the dragging spring on the lightest node it holds",
-                    crate::io::num(h),
-                    crate::io::num(limit.tool)
-                ));
-            };
-            let h = dt / k as f64;
-            (
-                Integrator::Prefactored,
-                h,
-                Some(format!(
-                    "no step down to dt / {MAX_AUTO_SUBSTEPS} meets the dynamic budget; prefactored implicit Euler at \
-                     {} s",
-                    crate::io::num(h)
-                )),
-            )
-        }
+        // The budget is out of reach: prefactored Euler at the step asked for.
+        None => (
+            Integrator::Prefactored,
+            dt,
+            Some(format!(
+                "no step down to dt / {MAX_AUTO_SUBSTEPS} meets the dynamic budget; prefactored implicit Euler at {} s",
+                crate::io::num(dt)
+            )),
+        ),
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::tool::drag_dt_limit;
 
-    /// The dragging spring is in the choice: a step the tissue alone allows but the spring on a
-    /// light node does not is substepped automatically, and refused by name when asked for.
+    /// Only the tissue bounds the step: symplectic Euler is substepped to within
+    /// [`AUTO_EXPLICIT_FRACTION`] of its limit and refused by name above
+    /// [`MAX_EXPLICIT_FRACTION`]; the implicit schemes run at any step (the drag is a split step).
     #[test]
-    fn the_drag_spring_bounds_every_integrator() {
-        let tool = drag_dt_limit(3.6e-4);
-        assert!(tool > 1e-4 && tool < 1e-3, "{tool}");
-        let limit = StepLimit { tissue: 6e-4, tool };
+    fn only_the_tissue_bounds_the_step() {
+        let limit = StepLimit::tissue(6e-4);
         let damping = Damping::Ratio { zeta: 0.2, omega_1: 90.0 };
         let (i, h, _) = choose_step(None, 1e-3, limit, damping, DEFAULT_DYNAMIC_BUDGET).expect("auto substeps");
-        assert!(h <= MAX_EXPLICIT_FRACTION * limit.of(i), "{i:?} at {h}");
-        for named in [Integrator::Symplectic, Integrator::Prefactored, Integrator::Implicit] {
-            let why = choose_step(Some(named), 1e-3, limit, damping, DEFAULT_DYNAMIC_BUDGET).expect_err("refused");
-            assert!(why.contains("s is above"), "{why}");
+        assert_eq!((i, h), (Integrator::Symplectic, 1e-3 / 3.0));
+        let why = choose_step(Some(Integrator::Symplectic), 1e-3, limit, damping, DEFAULT_DYNAMIC_BUDGET)
+            .expect_err("refused");
+        assert!(why.contains("s is above") && why.contains("for this tissue"), "{why}");
+        for named in [Integrator::Prefactored, Integrator::Newmark, Integrator::Implicit] {
+            assert!(limit.refusal(named, 1.0).is_none(), "{named:?}");
+            assert!(choose_step(Some(named), 1e-3, limit, damping, DEFAULT_DYNAMIC_BUDGET).is_ok(), "{named:?}");
         }
-        let why = StepLimit { tissue: 1.0, tool }.refusal(Integrator::Prefactored, 1e-3).expect("refused");
-        assert!(why.contains("dragging spring"), "{why}");
-        // Without a tool the implicit schemes have no limit.
-        assert!(StepLimit::tissue(1e-5).refusal(Integrator::Prefactored, 1.0).is_none());
-        assert_eq!(StepLimit::tissue(1e-5).of(Integrator::Symplectic), 1e-5);
+        assert_eq!(limit.of(Integrator::Symplectic), 6e-4);
     }
 }

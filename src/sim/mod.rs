@@ -34,4 +34,4 @@ pub use model::Model;
 pub use msm_tissue::{MsmTissue, explicit_dt_limit};
 pub use simulation::{BlowUp, MAX_RECOVERIES, Simulation};
 pub use tissue::Tissue;
-pub use tool::{DRAG_DAMPING, DRAG_STIFFNESS, Tool, drag_dt_limit};
+pub use tool::{DRAG_DAMPING, DRAG_STIFFNESS, Tool, drag_velocity_change};

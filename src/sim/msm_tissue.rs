@@ -125,6 +125,9 @@ impl Tissue for MsmTissue {
     fn kinetic_energy(&self) -> f64 {
         self.dynamics.kinetic_energy(&self.model)
     }
+    fn carries_contact_loads(&self) -> bool {
+        self.model.params.topology() != crate::mechanics::msm::Topology::Axis
+    }
     fn explicit_dt_limit(&self) -> f64 {
         self.dt_limit
     }

@@ -21,6 +21,9 @@ use crate::response::surface_compliance::{
     ComplianceError, ContactScratch, DEFAULT_DIVISIONS, MAX_CONTACT_NODES, SurfaceCompliance,
 };
 
+/// A still sphere's contact is solved again at most this often, s: the rate a haptic device
+/// reads the force (1 kHz), and the viewer's tick, whose substeps hold the loads.
+pub const HAPTIC_PERIOD_S: f64 = 1e-3;
 /// Presses per step at most while finding the lag's fixed point.
 pub const MAX_LAG_ITERATIONS: usize = 6;
 /// The fixed point is reached when the lag moves by less than this, metres.
@@ -43,6 +46,8 @@ pub struct SurfaceProbe {
     delta: [f64; 3],
     /// The fixed point's relaxation, carried from step to step.
     relaxation: f64,
+    /// Simulated time since the contact was last solved, s.
+    since_solve_s: f64,
 }
 
 impl SurfaceProbe {
@@ -58,6 +63,7 @@ impl SurfaceProbe {
             lag: None,
             delta: [0.0; 3],
             relaxation: 0.5,
+            since_solve_s: 0.0,
         }
     }
 
@@ -84,6 +90,7 @@ impl SurfaceProbe {
     /// Advances the slow modes by `dt` under the loads of the last update (none when the sphere
     /// is elsewhere: call [`SurfaceProbe::release`] first).
     pub fn advance(&mut self, dt: f64) {
+        self.since_solve_s += dt;
         if let Some(lag) = &mut self.lag {
             lag.advance(dt);
         }
@@ -108,8 +115,10 @@ impl SurfaceProbe {
         }
     }
 
-    /// The force of the tissue on the sphere (`centre`, `radius`), newtons; without the lag
-    /// solved again only when the sphere moved. Allocates nothing.
+    /// The force of the tissue on the sphere (`centre`, `radius`), newtons, solved again only
+    /// when the sphere moved or, with the lag, when it was last solved [`HAPTIC_PERIOD_S`] or more
+    /// ago and the lag has moved since (its loads held over the substeps of a tick). Allocates
+    /// nothing.
     pub fn update(&mut self, centre: [f64; 3], radius: f64) -> Result<[f64; 3], ComplianceError> {
         if self.lag.is_none() {
             if self.last == Some((centre, radius)) {
@@ -125,6 +134,9 @@ impl SurfaceProbe {
         let (x, y) = (centre[0], centre[1]);
         let mut d = self.delta;
         if self.last == Some((centre, radius)) {
+            if self.since_solve_s < HAPTIC_PERIOD_S * (1.0 - 1e-9) {
+                return Ok(self.force);
+            }
             let g = self.lag.as_ref().map_or([0.0; 3], |l| l.lag(x, y));
             if (0..3).all(|c| (g[c] - d[c]).abs() < LAG_TOLERANCE_M) {
                 return Ok(self.force);
@@ -160,6 +172,7 @@ impl SurfaceProbe {
         }
         self.delta = d;
         self.last = Some((centre, radius));
+        self.since_solve_s = 0.0;
         Ok(self.force)
     }
 

@@ -57,6 +57,13 @@ pub trait Tissue: Send + std::fmt::Debug {
     fn damping(&self) -> Damping;
     /// Its rest stiffness and masses (its small-displacement dynamics), or why it has none.
     fn modal(&self) -> Result<crate::response::modal::ModalModel, String>;
+    /// Whether it can carry the probe's contact forces as loads on its surface nodes. The paper's
+    /// axis lattice cannot: nothing resists a layer sliding over the one below, and under a
+    /// press its columns fold over (a node 6 cm off after 0.3 s at 8^3); it shows the press by
+    /// its own node contact while the hand still feels the material's surface compliance.
+    fn carries_contact_loads(&self) -> bool {
+        true
+    }
     /// Where its steps run when not on this CPU (the GPU's adapter), in words.
     fn computed_on(&self) -> Option<String> {
         None

@@ -2,7 +2,7 @@
 //! backward (implicit) Euler with the tangent of every step, and the same with the rest tangent
 //! factorised once (prefactored). No step allocates once the state is built.
 
-use super::forces::{ForceScratch, TangentAssembler, add_spring_forces, dispatch_avx2, gather_forces, pair_forces};
+use super::forces::{ForceScratch, TangentAssembler, accumulate_spring_forces, add_spring_forces, dispatch_avx2};
 use super::model::MsmModel;
 use super::reduction::DofMap;
 use crate::mechanics::cases::LoadCase;
@@ -283,11 +283,12 @@ impl Dynamics {
 
 #[inline(always)]
 fn symplectic_step_generic(model: &MsmModel, s: &mut Dynamics, dt: f64) {
-    pair_forces(model, &s.x, &mut s.scratch);
+    for f in &mut s.f {
+        f.fill(0.0);
+    }
+    accumulate_spring_forces::<true>(model, &s.x, &mut s.f, &mut s.scratch);
     for c in 0..3 {
-        let f = &mut s.f[c];
-        gather_forces(model, &s.scratch, c, f, true);
-        let (x, v, fe) = (&mut s.x[c], &mut s.v[c], &s.f_ext[c]);
+        let (x, v, f, fe) = (&mut s.x[c], &mut s.v[c], &s.f[c], &s.f_ext[c]);
         for ((((((x, v), f), fe), free), inv_m), d) in
             x.iter_mut().zip(v.iter_mut()).zip(f.iter()).zip(fe).zip(&s.free).zip(&s.inv_mass).zip(&model.damping)
         {

@@ -183,15 +183,3 @@ pub(super) fn check_steps(script: &Script, dt: f64) -> anyhow::Result<()> {
     }
     Ok(())
 }
-
-/// The nodes the script's drags hold.
-pub(super) fn drag_nodes(script: &Script) -> Vec<usize> {
-    script
-        .actions
-        .iter()
-        .filter_map(|a| match a {
-            Action::Drag { node, .. } => Some(*node),
-            _ => None,
-        })
-        .collect()
-}

@@ -53,7 +53,7 @@ mod path;
 
 pub use path::{PathKey, PathSample};
 
-use check::{check_script, check_steps, drag_nodes};
+use check::{check_script, check_steps};
 use serde::{Deserialize, Serialize};
 
 use crate::gpu::Compute;
@@ -307,8 +307,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     let tissue = script.compute.place(tissue).map_err(|e| anyhow::anyhow!("script: compute \"gpu\": {e}"))?;
     let case = clamp_case(&grid, &material.name, &script.clamp)?;
     let mut sim = Simulation::with_tissue(tissue, Integrator::Symplectic, script.dt, case.as_ref());
-    // The viewer's step policy, with the script's drags in it: refused before the first step.
-    sim.set_draggable(drag_nodes(script));
+    // The viewer's step policy: refused before the first step.
     let note = sim.try_set_integrator(script.integrator, script.dt).map_err(|why| {
         anyhow::anyhow!("script: {why}; lower dt, or leave \"integrator\" out (the automatic choice substeps dt)")
     })?;
