@@ -313,7 +313,9 @@ impl Simulation {
     fn unhealthy(&self) -> Option<Unhealthy> {
         let l = crate::mechanics::grid::CUBE_SIDE_M;
         let (x, v) = (self.tissue.x(), self.tissue.v());
-        let finite = x.iter().chain(v).all(|c| c.iter().all(|v| v.is_finite()));
+        // A sum is finite only where every term is (an overflow to infinity is a blow-up too),
+        // and it vectorises where a test per value does not.
+        let finite = x.iter().chain(v).all(|c| c.iter().sum::<f64>().is_finite());
         if !finite {
             return Some(Unhealthy::NonFinite);
         }
