@@ -34,6 +34,8 @@ pub struct MsmTissue {
     /// The ratio asked for (kept across parameters; the axis lattice uses its nodal `d`).
     ratio: Option<f64>,
     damping: Damping,
+    /// The nodes' masses summed, kg (the blow-up guard asks every step).
+    total_mass: f64,
 }
 
 impl MsmTissue {
@@ -42,7 +44,8 @@ impl MsmTissue {
         let dynamics = Dynamics::new(&model);
         let dt_limit = explicit_dt_limit(&model);
         let damping = Damping::Nodal(model.params.d);
-        Self { model, dynamics, density, dt_limit, ratio: None, damping }
+        let total_mass = model.masses.iter().sum();
+        Self { model, dynamics, density, dt_limit, ratio: None, damping, total_mass }
     }
 
     /// The lattice of `params` on the paper's grid for a material of `density`.
@@ -82,7 +85,7 @@ impl Tissue for MsmTissue {
         self.model.grid
     }
     fn total_mass(&self) -> f64 {
-        self.model.masses.iter().sum()
+        self.total_mass
     }
     fn node_mass(&self, p: usize) -> f64 {
         self.model.masses[p]
@@ -150,6 +153,7 @@ impl Tissue for MsmTissue {
         self.damping = damping;
         self.dynamics.set_model(&self.model);
         self.dt_limit = explicit_dt_limit(&self.model);
+        self.total_mass = self.model.masses.iter().sum();
         Ok(())
     }
     fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String> {
@@ -158,6 +162,7 @@ impl Tissue for MsmTissue {
         self.ratio = Some(zeta);
         self.dynamics.set_model(&self.model);
         self.dt_limit = explicit_dt_limit(&self.model);
+        self.total_mass = self.model.masses.iter().sum();
         Ok(())
     }
     fn damping(&self) -> Damping {
