@@ -162,7 +162,6 @@ impl Tissue for MsmTissue {
         self.ratio = Some(zeta);
         self.dynamics.set_model(&self.model);
         self.dt_limit = explicit_dt_limit(&self.model);
-        self.total_mass = self.model.masses.iter().sum();
         Ok(())
     }
     fn damping(&self) -> Damping {

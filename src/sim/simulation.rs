@@ -384,14 +384,15 @@ impl Simulation {
         let Tool::Drag { node, target } = self.tool else {
             return;
         };
-        let (m, free) = (self.tissue.node_mass(node), self.tissue.free()[node]);
-        let (x, v) = self.tissue.x_v_mut();
+        let (x, v) = (self.tissue.x(), self.tissue.v());
         let (xn, vn): ([f64; 3], [f64; 3]) = (std::array::from_fn(|c| x[c][node]), std::array::from_fn(|c| v[c][node]));
-        if free == 0.0 {
+        if self.tissue.free()[node] == 0.0 {
             self.tool_force = std::array::from_fn(|c| -DRAG_STIFFNESS * (target[c] - xn[c]));
             return;
         }
+        let m = self.tissue.node_mass(node);
         let dv = drag_velocity_change(target, xn, vn, m, self.dt);
+        let (x, v) = self.tissue.x_v_mut();
         for c in 0..3 {
             v[c][node] += dv[c];
             x[c][node] += self.dt * dv[c];
