@@ -120,8 +120,8 @@ fn time_tick(sim: &mut Simulation, integrator: Integrator, substeps: usize) -> R
     failed.map_or(Ok(times[times.len() / 2]), Err)
 }
 
-/// Every integrator of `model` on `grid` for `compute`.
-fn sweep_model(
+/// Every integrator of `model` on `grid` for `compute`, into `ticks`.
+pub fn sweep_model(
     model: Model,
     nodes: usize,
     surface: &MaterialSurface,

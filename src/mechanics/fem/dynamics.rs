@@ -3,16 +3,15 @@
 //!
 //! Linear elements compute `f = -K u`: exact for small displacements, but a rigid rotation
 //! produces strain and force (the body swells when it turns). Corotational elements take out
-//! each element's rotation `R` (polar decomposition of the deformation gradient at its centre)
-//! and compute `f_e = -R K_e (R^T x_e - X_e)`, which is zero for any rigid motion. The implicit
+//! each element's rotation `R` (polar decomposition of the deformation gradient at its centre,
+//! updated incrementally: [`super::corotation`]) and compute `f_e = -R K_e (R^T x_e - X_e)`,
+//! which is zero for any rigid motion. The implicit
 //! step factorises `M (1 + dt alpha) + dt^2 K` once (the linear stiffness), so for the linear
 //! model it is exact backward Euler and for the corotational one the Jacobian is frozen at rest
 //! while the forces are the full corotational ones. No step allocates.
 
-use nalgebra::{Matrix3, Rotation3, SMatrix, Vector3};
-
 use super::FemModel;
-use super::element::NODE_SIGNS;
+use super::corotation::{Corotation, IDENTITY};
 use crate::mechanics::sparse::{SparseError, SpdSystem};
 
 /// How element forces are computed.
@@ -58,8 +57,13 @@ pub struct FemDynamics {
     rest: Vec<f64>,
     f: Vec<f64>,
     u: Vec<f64>,
-    /// Per element: the rotation of the last force evaluation (warm start of the next).
-    rotations: Vec<Rotation3<f64>>,
+    /// Per element: the rotation (a unit quaternion `[w, x, y, z]`) of the last force
+    /// evaluation (warm start of the next), and the buffer the next one writes.
+    rotations: Vec<[f64; 4]>,
+    next_rotations: Vec<[f64; 4]>,
+    /// Positions and rest positions component-wise (`[c][node]`), for the corotated elements.
+    x_components: [Vec<f64>; 3],
+    rest_components: [Vec<f64>; 3],
     /// Each element's corotated force on its eight nodes (filled in parallel, gathered in order).
     element_forces: Vec<[f64; 24]>,
     /// Whether the element loop may use the physics pool ([`crate::mechanics::parallel`]).
@@ -100,7 +104,10 @@ impl FemDynamics {
             rest,
             f: vec![0.0; dofs],
             u: vec![0.0; dofs],
-            rotations: vec![Rotation3::identity(); elements],
+            rotations: vec![IDENTITY; elements],
+            next_rotations: vec![IDENTITY; elements],
+            x_components: std::array::from_fn(|_| vec![0.0; g.num_nodes()]),
+            rest_components: std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect()),
             element_forces: vec![[0.0; 24]; elements],
             parallel: true,
             rotation_iterations: ROTATION_ITERATIONS,
@@ -142,35 +149,22 @@ impl FemDynamics {
                 }
             }
             Formulation::Corotational => {
+                for (p, x) in self.x.chunks_exact(3).enumerate() {
+                    for c in 0..3 {
+                        self.x_components[c][p] = x[c];
+                    }
+                }
+                let (x, rest) = (&self.x_components, &self.rest_components);
                 let at = Corotation {
-                    x: &self.x,
-                    rest: &self.rest,
+                    x: [&x[0], &x[1], &x[2]],
+                    rest: [&rest[0], &rest[1], &rest[2]],
                     ke: &self.model.ke,
-                    inv4h: 1.0 / (4.0 * self.model.grid.h()),
+                    grid: self.model.grid,
                     iterations: self.rotation_iterations,
                 };
+                at.all(&self.rotations, &mut self.next_rotations, &mut self.element_forces, self.parallel);
+                std::mem::swap(&mut self.rotations, &mut self.next_rotations);
                 let elements = self.model.elements();
-                let work = |((nodes, r), fe): ((&[usize; 8], &mut Rotation3<f64>), &mut [f64; 24])| {
-                    corotated_force(nodes, &at, r, fe);
-                };
-                let pool = crate::mechanics::parallel::pool()
-                    .filter(|_| self.parallel && elements.len() >= crate::mechanics::parallel::MIN_PARALLEL_ITEMS);
-                match pool {
-                    Some(pool) => pool.install(|| {
-                        use rayon::prelude::*;
-                        elements
-                            .par_iter()
-                            .zip(self.rotations.par_iter_mut())
-                            .zip(self.element_forces.par_iter_mut())
-                            .with_min_len(64)
-                            .for_each(work);
-                    }),
-                    None => elements
-                        .iter()
-                        .zip(self.rotations.iter_mut())
-                        .zip(self.element_forces.iter_mut())
-                        .for_each(work),
-                }
                 // Gathered in element order on one thread: the same sums, bit for bit, however split.
                 self.f.copy_from_slice(&self.f_ext);
                 for (nodes, fe) in elements.iter().zip(&self.element_forces) {
@@ -275,54 +269,17 @@ impl FemDynamics {
 
     /// Bytes held by the state, the element data and the factor (if built).
     pub fn memory_bytes(&self) -> usize {
-        let vectors =
-            8 * self.x.len() * 8 + self.rotations.len() * 72 + self.model.elements().len() * (64 + 192) + 24 * 24 * 8;
+        let vectors = 8 * self.x.len() * 8
+            + self.rotations.len() * 64
+            + self.model.elements().len() * (64 + 192)
+            + 6 * 8 * self.rest.len() / 3
+            + 24 * 24 * 8;
         vectors + self.factor_memory_bytes()
     }
 }
 
-/// Where the rotation extraction stops early (the axis-angle correction's size).
-const ROTATION_EPS: f64 = 1e-12;
 /// Iterations of the rotation extraction per step, from the last step's rotation
 /// ([`FemDynamics::rotation_iterations`]'s default): on a 4 cm corner drag with a 6 mm probe
 /// press at 0.25 ms steps, 2 moved the nodes by 5e-5 of the largest displacement and the probe's
 /// force by 2e-5 against iterating to convergence (1: 3e-4 and 1e-4), at half the step's cost.
 pub const ROTATION_ITERATIONS: usize = 2;
-
-/// What every element's corotated force reads.
-#[derive(Clone, Copy)]
-struct Corotation<'a> {
-    x: &'a [f64],
-    rest: &'a [f64],
-    ke: &'a super::element::ElementStiffness,
-    /// `1 / 4h`: the shape functions' gradient at the centre is `NODE_SIGNS / 4h`.
-    inv4h: f64,
-    iterations: usize,
-}
-
-/// One corotated element's force on its nodes, `R K_e (R^T x_e - X_e)`, into `out`; `r` is its
-/// rotation, updated incrementally from the last step's by `iterations` of the rotation
-/// extraction of Mueller et al. (2016) towards the polar rotation of the deformation gradient at
-/// the element's centre, `F = sum_a x_a (grad N_a)^T`.
-fn corotated_force(nodes: &[usize; 8], at: &Corotation<'_>, r: &mut Rotation3<f64>, out: &mut [f64; 24]) {
-    let Corotation { x, rest, ke, inv4h, iterations } = *at;
-    let mut def = Matrix3::zeros();
-    for (a, &p) in nodes.iter().enumerate() {
-        let xa = Vector3::new(x[3 * p], x[3 * p + 1], x[3 * p + 2]);
-        let g = Vector3::from(NODE_SIGNS[a]) * inv4h;
-        def += xa * g.transpose();
-    }
-    *r = Rotation3::from_matrix_eps(&def, ROTATION_EPS, iterations, *r);
-    let rm = r.matrix();
-    let mut local = SMatrix::<f64, 24, 1>::zeros();
-    for (a, &p) in nodes.iter().enumerate() {
-        let xa = Vector3::new(x[3 * p], x[3 * p + 1], x[3 * p + 2]);
-        let ra = Vector3::new(rest[3 * p], rest[3 * p + 1], rest[3 * p + 2]);
-        local.fixed_rows_mut::<3>(3 * a).copy_from(&(rm.transpose() * xa - ra));
-    }
-    let fl = ke * local;
-    for a in 0..8 {
-        let fg = rm * fl.fixed_rows::<3>(3 * a);
-        out[3 * a..3 * a + 3].copy_from_slice(fg.as_slice());
-    }
-}

@@ -7,6 +7,7 @@
 //! element-by-element residual so that answers sit at round-off.
 
 pub mod clamped;
+pub mod corotation;
 pub mod dynamics;
 pub mod element;
 pub mod graded;

@@ -4,9 +4,23 @@
 //! each axis: 27 classes). So `K` is never stored: 27 classes x 27 blocks x 9 values, and a
 //! product costs 243 multiply-adds a node, gathered row by row (no scatter), against the
 //! element loop's 576 a node scattered over eight elements.
+//!
+//! Two layouts: interleaved (`3 node + component`, [`Stencil::apply`]) and component-wise
+//! (`u[c][node]`, [`Stencil::apply_components`], the running FEM's state). In the second, the
+//! nodes of a grid row that are inside along x share one class and read their neighbours at
+//! the same index steps, so with AVX2 four of them are summed at a time; every node's sum is
+//! the same sequence of operations in both layouts and on both paths, so the bits are the same.
 
 use super::element::{ElementStiffness, NODE_SIGNS};
 use crate::mechanics::grid::Grid;
+
+/// A neighbour in a node's row of `K`: the step in node index to it and its 3x3 block
+/// (row-major).
+#[derive(Debug, Clone, Copy)]
+struct Tap {
+    delta: isize,
+    block: [f64; 9],
+}
 
 /// `K` of a grid's hex8 FEM as per-class 3x3 blocks.
 #[derive(Debug, Clone)]
@@ -15,6 +29,8 @@ pub struct Stencil {
     /// `blocks[class][offset]`: the 3x3 block (row-major) coupling a node of `class` with its
     /// neighbour at `offset = (dx + 1) + 3 (dy + 1) + 9 (dz + 1)`.
     blocks: Vec<[[f64; 9]; 27]>,
+    /// `taps[class]`: the neighbours a node of `class` has, in increasing offset.
+    taps: Vec<Vec<Tap>>,
 }
 
 /// The class of index `i` along an axis of `n` nodes: 0 on the low face, 2 on the high one, 1
@@ -27,6 +43,21 @@ fn side(i: usize, n: usize) -> usize {
     } else {
         1
     }
+}
+
+/// A node's row of `K` times `u`: the sum over its taps, each `b u_q` summed as
+/// `(b0 x + b1 y) + b2 z` per component (the order [`row_avx2`] keeps).
+#[inline(always)]
+fn row_sum(taps: &[Tap], p: usize, load: impl Fn(usize) -> [f64; 3]) -> [f64; 3] {
+    let mut acc = [0.0; 3];
+    for t in taps {
+        let [x, y, z] = load(p.wrapping_add_signed(t.delta));
+        let b = &t.block;
+        acc[0] += b[0] * x + b[1] * y + b[2] * z;
+        acc[1] += b[3] * x + b[4] * y + b[5] * z;
+        acc[2] += b[6] * x + b[7] * y + b[8] * z;
+    }
+    acc
 }
 
 impl Stencil {
@@ -63,7 +94,24 @@ impl Stencil {
                 }
             }
         }
-        Self { n, blocks }
+        let taps = (0..27)
+            .map(|class| {
+                let s = [class % 3, (class / 3) % 3, class / 9];
+                (0..27)
+                    .filter(|&o: &usize| {
+                        let d = [o % 3, (o / 3) % 3, o / 9];
+                        // No neighbour below the low face or above the high one.
+                        (0..3).all(|a| !(s[a] == 0 && d[a] == 0) && !(s[a] == 2 && d[a] == 2))
+                    })
+                    .map(|o| {
+                        let d = [o % 3, (o / 3) % 3, o / 9].map(|d| d as isize - 1);
+                        let n = n as isize;
+                        Tap { delta: d[0] + n * d[1] + n * n * d[2], block: blocks[class][o] }
+                    })
+                    .collect()
+            })
+            .collect();
+        Self { n, blocks, taps }
     }
 
     /// `blocks()[class][offset]`: the 3x3 block (row-major) coupling a node of `class` (`sx + 3 sy
@@ -71,6 +119,13 @@ impl Stencil {
     /// `offset = (dx + 1) + 3 (dy + 1) + 9 (dz + 1)`.
     pub fn blocks(&self) -> &[[[f64; 9]; 27]] {
         &self.blocks
+    }
+
+    /// Whether a product on this grid splits its slabs over the physics pool.
+    fn pool(&self, parallel: bool) -> Option<&'static rayon::ThreadPool> {
+        let n = self.n;
+        crate::mechanics::parallel::pool()
+            .filter(|_| parallel && n * n * n >= crate::mechanics::parallel::MIN_PARALLEL_ITEMS.max(4096))
     }
 
     /// `out = K u`, interleaved (`3 node + component`), slab by slab of constant z, the slabs
@@ -82,71 +137,152 @@ impl Stencil {
 
     /// [`Stencil::apply`], on the calling thread alone unless `parallel` (the bench's baseline).
     pub fn apply_on(&self, u: &[f64], out: &mut [f64], parallel: bool) {
-        let n = self.n;
-        let slab = 3 * n * n;
-        let pool = crate::mechanics::parallel::pool()
-            .filter(|_| parallel && n * n * n >= crate::mechanics::parallel::MIN_PARALLEL_ITEMS.max(4096));
-        match pool {
+        let slab = 3 * self.n * self.n;
+        match self.pool(parallel) {
             Some(pool) => pool.install(|| {
                 use rayon::prelude::*;
-                out.par_chunks_mut(slab).enumerate().for_each(|(k, o)| self.apply_slab(u, k, o));
+                out.par_chunks_mut(slab).enumerate().for_each(|(k, o)| self.interleaved_slab(u, k, o));
             }),
-            None => out.chunks_mut(slab).enumerate().for_each(|(k, o)| self.apply_slab(u, k, o)),
+            None => out.chunks_mut(slab).enumerate().for_each(|(k, o)| self.interleaved_slab(u, k, o)),
         }
     }
 
-    /// The rows of the slab `z = k` into `out` (that slab's part of `K u`).
-    fn apply_slab(&self, u: &[f64], k: usize, out: &mut [f64]) {
+    /// The rows of the slab `z = k` into `out` (that slab's part of `K u`), interleaved.
+    fn interleaved_slab(&self, u: &[f64], k: usize, out: &mut [f64]) {
         let n = self.n;
-        // Dof offsets of the 27 neighbours of an inside node.
-        let offsets: [usize; 27] = std::array::from_fn(|o| 3 * ((o % 3) + n * ((o / 3) % 3) + n * n * (o / 9)));
-        let inside = &self.blocks[13];
+        let load = |q: usize| [u[3 * q], u[3 * q + 1], u[3 * q + 2]];
         for j in 0..n {
-            let row_inside = side(j, n) == 1 && side(k, n) == 1;
             for i in 0..n {
-                let p = i + n * (j + n * k);
-                let acc = if row_inside && side(i, n) == 1 {
-                    // All 27 neighbours exist: the first is at (i - 1, j - 1, k - 1).
-                    let first = 3 * (p - 1 - n - n * n);
-                    let mut acc = [0.0; 3];
-                    for (b, &o) in inside.iter().zip(&offsets) {
-                        let v = &u[first + o..first + o + 3];
-                        acc[0] += b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
-                        acc[1] += b[3] * v[0] + b[4] * v[1] + b[5] * v[2];
-                        acc[2] += b[6] * v[0] + b[7] * v[1] + b[8] * v[2];
-                    }
-                    acc
-                } else {
-                    self.boundary_row(u, [i, j, k])
-                };
+                let taps = &self.taps[side(i, n) + 3 * side(j, n) + 9 * side(k, n)];
+                let acc = row_sum(taps, i + n * (j + n * k), load);
                 let at = 3 * (i + n * j);
                 out[at..at + 3].copy_from_slice(&acc);
             }
         }
     }
 
-    /// The row of a node on the cube's boundary (some neighbours missing).
-    fn boundary_row(&self, u: &[f64], [i, j, k]: [usize; 3]) -> [f64; 3] {
+    /// `out[c] = (K u)[c]` with both component-wise (`u[c][node]`), slab by slab of constant z
+    /// over the physics pool on a large enough grid: the same bits as [`Stencil::apply`].
+    /// Allocates nothing.
+    pub fn apply_components(&self, u: &[Vec<f64>; 3], out: &mut [Vec<f64>; 3]) {
+        self.apply_components_on(u, out, true);
+    }
+
+    /// [`Stencil::apply_components`], on the calling thread alone unless `parallel`.
+    pub fn apply_components_on(&self, u: &[Vec<f64>; 3], out: &mut [Vec<f64>; 3], parallel: bool) {
+        let plane = self.n * self.n;
+        let u = [&u[0][..], &u[1][..], &u[2][..]];
+        let [o0, o1, o2] = out;
+        match self.pool(parallel) {
+            Some(pool) => pool.install(|| {
+                use rayon::prelude::*;
+                o0.par_chunks_mut(plane)
+                    .zip(o1.par_chunks_mut(plane))
+                    .zip(o2.par_chunks_mut(plane))
+                    .enumerate()
+                    .for_each(|(k, ((a, b), c))| self.components_slab(u, k, [a, b, c]));
+            }),
+            None => o0
+                .chunks_mut(plane)
+                .zip(o1.chunks_mut(plane))
+                .zip(o2.chunks_mut(plane))
+                .enumerate()
+                .for_each(|(k, ((a, b), c))| self.components_slab(u, k, [a, b, c])),
+        }
+    }
+
+    /// The rows of the slab `z = k` into `out` (that slab's part of `K u`), component-wise: the
+    /// nodes on the x faces one by one, those between them as one run of a class.
+    fn components_slab(&self, u: [&[f64]; 3], k: usize, out: [&mut [f64]; 3]) {
         let n = self.n;
-        let row = &self.blocks[side(i, n) + 3 * side(j, n) + 9 * side(k, n)];
-        let range = |c: usize| (usize::from(c == 0), 1 + usize::from(c + 1 < n));
-        let ((x0, x1), (y0, y1), (z0, z1)) = (range(i), range(j), range(k));
-        let p = i + n * (j + n * k);
-        let mut acc = [0.0; 3];
-        for dz in z0..=z1 {
-            for dy in y0..=y1 {
-                for dx in x0..=x1 {
-                    // The neighbour at (i + dx - 1, j + dy - 1, k + dz - 1).
-                    let q = p + dx + n * (dy + n * dz) - 1 - n - n * n;
-                    let b = &row[dx + 3 * dy + 9 * dz];
-                    let v = &u[3 * q..3 * q + 3];
-                    acc[0] += b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
-                    acc[1] += b[3] * v[0] + b[4] * v[1] + b[5] * v[2];
-                    acc[2] += b[6] * v[0] + b[7] * v[1] + b[8] * v[2];
-                }
+        let load = |q: usize| [u[0][q], u[1][q], u[2][q]];
+        let [o0, o1, o2] = out;
+        for j in 0..n {
+            let row_class = 3 * side(j, n) + 9 * side(k, n);
+            let first = n * (j + n * k);
+            for i in [0, n - 1] {
+                let acc = row_sum(&self.taps[side(i, n) + row_class], first + i, load);
+                (o0[n * j + i], o1[n * j + i], o2[n * j + i]) = (acc[0], acc[1], acc[2]);
+            }
+            if n > 2 {
+                let at = n * j + 1..n * j + n - 1;
+                let run = [&mut o0[at.clone()], &mut o1[at.clone()], &mut o2[at]];
+                inside_run(&self.taps[1 + row_class], u, first + 1, run);
             }
         }
-        acc
+    }
+}
+
+/// The rows of the nodes `from..from + out[0].len()` of one class (a grid row's nodes inside
+/// along x) into `out`, component-wise.
+fn inside_run(taps: &[Tap], u: [&[f64]; 3], from: usize, out: [&mut [f64]; 3]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if out[0].len() >= 4 && std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            unsafe { row_avx2(taps, u, from, out) };
+            return;
+        }
+    }
+    let load = |q: usize| [u[0][q], u[1][q], u[2][q]];
+    let [o0, o1, o2] = out;
+    for s in 0..o0.len() {
+        let acc = row_sum(taps, from + s, load);
+        (o0[s], o1[s], o2[s]) = (acc[0], acc[1], acc[2]);
+    }
+}
+
+/// [`inside_run`] four nodes at a time (at least four), the last four overlapping the ones
+/// before where the run is not a multiple of four (the same sums written twice). No fused
+/// multiply-add, so every node's sum has the bits of [`row_sum`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn row_avx2(taps: &[Tap], u: [&[f64]; 3], from: usize, out: [&mut [f64]; 3]) {
+    use std::arch::x86_64::{
+        _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_setzero_pd, _mm256_storeu_pd,
+    };
+    let len = out[0].len();
+    debug_assert!(len >= 4 && out.iter().all(|o| o.len() == len));
+    let [o0, o1, o2] = out;
+    let mut s = 0;
+    loop {
+        let start = s.min(len - 4);
+        let p = from + start;
+        let (mut a0, mut a1, mut a2) = (_mm256_setzero_pd(), _mm256_setzero_pd(), _mm256_setzero_pd());
+        for t in taps {
+            let q = p.wrapping_add_signed(t.delta);
+            // The four neighbours of one tap are contiguous: bounds-checked once as slices.
+            let (x, y, z) = (&u[0][q..q + 4], &u[1][q..q + 4], &u[2][q..q + 4]);
+            // SAFETY: each slice holds exactly four values, just checked.
+            let (x, y, z) =
+                unsafe { (_mm256_loadu_pd(x.as_ptr()), _mm256_loadu_pd(y.as_ptr()), _mm256_loadu_pd(z.as_ptr())) };
+            let b = &t.block;
+            macro_rules! row {
+                ($r:expr) => {
+                    _mm256_add_pd(
+                        _mm256_add_pd(
+                            _mm256_mul_pd(_mm256_set1_pd(b[3 * $r]), x),
+                            _mm256_mul_pd(_mm256_set1_pd(b[3 * $r + 1]), y),
+                        ),
+                        _mm256_mul_pd(_mm256_set1_pd(b[3 * $r + 2]), z),
+                    )
+                };
+            }
+            a0 = _mm256_add_pd(a0, row!(0));
+            a1 = _mm256_add_pd(a1, row!(1));
+            a2 = _mm256_add_pd(a2, row!(2));
+        }
+        let (d0, d1, d2) = (&mut o0[start..start + 4], &mut o1[start..start + 4], &mut o2[start..start + 4]);
+        // SAFETY: each slice holds exactly four values, just checked.
+        unsafe {
+            _mm256_storeu_pd(d0.as_mut_ptr(), a0);
+            _mm256_storeu_pd(d1.as_mut_ptr(), a1);
+            _mm256_storeu_pd(d2.as_mut_ptr(), a2);
+        }
+        if start + 4 >= len {
+            break;
+        }
+        s += 4;
     }
 }
 
@@ -169,6 +305,32 @@ mod tests {
             let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for (x, y) in a.iter().zip(&b) {
                 assert!((x - y).abs() <= 1e-12 * scale, "n = {n}: {x} vs {y}");
+            }
+        }
+    }
+
+    #[test]
+    fn component_wise_is_interleaved_bit_for_bit() {
+        let material = Material::object_b();
+        // Runs inside along x of 0, 1, 3, 4, 6, 9 and 14 nodes (the AVX2 path from 4, its last
+        // four overlapping from 6), and 16^3 split over the pool.
+        for n in [2, 3, 5, 6, 8, 11, 16] {
+            let grid = Grid::new(n).unwrap();
+            let fem = super::super::FemModel::new(grid, &material);
+            let stencil = Stencil::new(&grid, &fem.ke);
+            let nn = grid.num_nodes();
+            let u: Vec<f64> = (0..3 * nn).map(|d| ((d * 7919) % 101) as f64 * 1e-5 - 5e-4).collect();
+            let split: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|p| u[3 * p + c]).collect());
+            let mut interleaved = vec![0.0; 3 * nn];
+            stencil.apply_on(&u, &mut interleaved, false);
+            for parallel in [false, true] {
+                let mut out: [Vec<f64>; 3] = std::array::from_fn(|_| vec![f64::NAN; nn]);
+                stencil.apply_components_on(&split, &mut out, parallel);
+                for p in 0..nn {
+                    for c in 0..3 {
+                        assert_eq!(out[c][p].to_bits(), interleaved[3 * p + c].to_bits(), "n = {n}, node {p}, {c}");
+                    }
+                }
             }
         }
     }
