@@ -31,6 +31,8 @@ pub struct FemTissue {
     u: [Vec<f64>; 3],
     /// 1.0 for a free dof, 0.0 for a fixed one, component-wise.
     free_dofs: [Vec<f64>; 3],
+    /// `1 / mass` of each node (its three dofs share it), 1/kg.
+    inv_mass: Vec<f64>,
     dt_limit: f64,
     total_mass: f64,
     density: f64,
@@ -54,6 +56,7 @@ impl FemTissue {
             rest: split(dynamics.rest()),
             u: std::array::from_fn(|_| vec![0.0; nn]),
             free_dofs: split(&dynamics.free),
+            inv_mass: (0..nn).map(|p| dynamics.inv_mass[3 * p]).collect(),
             dt_limit,
             total_mass: dynamics.mass.iter().sum::<f64>() / 3.0,
             density: material.density,
@@ -75,7 +78,7 @@ impl FemTissue {
 
     /// One symplectic Euler step of the linear FEM on the component-wise state, the operations
     /// of [`FemDynamics::step_symplectic`] in the same order (the same bits): `u = x - X`,
-    /// `v = (v + dt ((f_ext - K u) / m - alpha v)) free`, `x += dt v`. Allocation-free.
+    /// `v = (v + dt ((f_ext - K u) m^-1 - alpha v)) free`, `x += dt v`. Allocation-free.
     pub fn step_linear_symplectic(&mut self, dt: f64) {
         let d = &self.dynamics;
         for c in 0..3 {
@@ -90,7 +93,7 @@ impl FemTissue {
                 (&mut self.x[c], &mut self.v[c], &self.f_ext[c], &self.forces[c], &self.free_dofs[c]);
             for p in 0..x.len() {
                 let f = f_ext[p] - ku[p];
-                let vel = (v[p] + dt * (f / d.mass[3 * p + c] - alpha * v[p])) * free[p];
+                let vel = (v[p] + dt * (f * self.inv_mass[p] - alpha * v[p])) * free[p];
                 v[p] = vel;
                 x[p] += dt * vel;
             }

@@ -11,7 +11,7 @@
 //!
 //! The elements of a grid row (along x) have the same node pattern at consecutive node indices,
 //! so on the component-wise positions `x[c][node]` the node `a` of four neighbouring elements is
-//! four consecutive values: every operation runs on four lanes ([`Lanes`]), with AVX2 where the
+//! four consecutive values: every operation runs on four lanes (`Lanes`), with AVX2 where the
 //! CPU has it (no fused multiply-add: one element's force has the same bits in any lane and on
 //! any path). A row whose length is not a multiple of four ends with four elements that overlap
 //! the ones before; the rotations are double-buffered (read from the last evaluation's, written
@@ -102,6 +102,127 @@ fn matrix<const W: usize>(q: [Lanes<W>; 4]) -> [V3<W>; 3] {
     ]
 }
 
+/// `K_e local`, eight rows at a time (`K_e` is symmetric: column j is row j): 576 multiply-adds.
+#[inline(always)]
+fn dense_product<const W: usize>(ke: &ElementStiffness, local: &[Lanes<W>; 24]) -> [Lanes<W>; 24] {
+    let ke = ke.as_slice();
+    let mut fl = [Lanes::<W>::splat(0.0); 24];
+    for block in 0..3 {
+        let mut acc = [Lanes::<W>::splat(0.0); 8];
+        for (j, lj) in local.iter().enumerate() {
+            let col = &ke[24 * j + 8 * block..24 * j + 8 * block + 8];
+            for (acc, &k) in acc.iter_mut().zip(col) {
+                *acc = *acc + k * *lj;
+            }
+        }
+        fl[8 * block..8 * block + 8].copy_from_slice(&acc);
+    }
+    fl
+}
+
+/// The corner of node `a` (spec order) as bits `bx + 2 by + 4 bz`, 1 on the high side.
+#[inline(always)]
+fn corner(a: usize) -> usize {
+    let b = NODE_SIGNS[a].map(|s| usize::from(s > 0.0));
+    b[0] + 2 * b[1] + 4 * b[2]
+}
+
+/// The Walsh function of mode `m` (bits `mx + 2 my + 4 mz`) at node `a`: the product of the
+/// node's signs along the axes of `m`'s bits.
+fn walsh(m: usize, a: usize) -> f64 {
+    (0..3).filter(|axis| (m >> axis) & 1 == 1).map(|axis| NODE_SIGNS[a][axis]).product()
+}
+
+/// The element matrix in the parity basis of the cube's corners.
+///
+/// Per displacement component, the eight nodal values become eight Walsh modes, `v_m = sum_a
+/// H_ma u_a` with `H_ma = +-1` (the product of node `a`'s signs along the axes of `m`). A reflection of the element along an axis flips the
+/// modes odd along it and the displacement component along it, so a member `(c, m)` has the
+/// parity `m xor e_c` under the three reflections. Where `K_e` commutes with them (a cube of an
+/// orthotropic material whose axes are the grid's: both objects), it couples only members of
+/// one parity: eight 3x3 blocks, 72 entries instead of 576, and `K_e u = H^T B H u` costs 72
+/// multiplies and 192 adds (the transforms as butterflies) instead of 576 multiply-adds.
+#[derive(Debug, Clone)]
+pub struct ParityBlocks {
+    /// `blocks[s][3 c + d]`: the coupling of component `c` in mode `s xor e_c` with component
+    /// `d` in mode `s xor e_d` (`e = 1, 2, 4`), `H K_e H^T / 64`.
+    blocks: [[f64; 9]; 8],
+}
+
+impl ParityBlocks {
+    /// `ke`'s blocks, or `None` where it couples members of different parities by more than
+    /// round-off (a material whose axes are not the grid's).
+    pub fn of(ke: &ElementStiffness) -> Option<Self> {
+        let entry = |(c, m): (usize, usize), (d, k): (usize, usize)| {
+            let mut sum = 0.0;
+            for a in 0..8 {
+                for b in 0..8 {
+                    sum += walsh(m, a) * ke[(3 * a + c, 3 * b + d)] * walsh(k, b);
+                }
+            }
+            sum / 64.0
+        };
+        let members: Vec<(usize, usize)> = (0..3).flat_map(|c| (0..8).map(move |m| (c, m))).collect();
+        let parity = |(c, m): (usize, usize)| m ^ (1 << c);
+        let scale = ke.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for &i in &members {
+            for &j in &members {
+                if parity(i) != parity(j) && entry(i, j).abs() > 1e-12 * scale {
+                    return None;
+                }
+            }
+        }
+        let blocks = std::array::from_fn(|s| {
+            std::array::from_fn(|e| entry((e / 3, s ^ (1 << (e / 3))), (e % 3, s ^ (1 << (e % 3)))))
+        });
+        Some(Self { blocks })
+    }
+
+    /// `K_e local` through the parity blocks.
+    #[inline(always)]
+    fn apply<const W: usize>(&self, local: &[Lanes<W>; 24]) -> [Lanes<W>; 24] {
+        // v[c][m] = sum_a H_ma local[3 a + c], by butterflies over the corner bits.
+        let mut v = [[Lanes::<W>::splat(0.0); 8]; 3];
+        for a in 0..8 {
+            for c in 0..3 {
+                v[c][corner(a)] = local[3 * a + c];
+            }
+        }
+        for t in &mut v {
+            for bit in [1, 2, 4] {
+                for i in (0..8).filter(|i| i & bit == 0) {
+                    let (lo, hi) = (t[i], t[i | bit]);
+                    (t[i], t[i | bit]) = (lo + hi, hi - lo);
+                }
+            }
+        }
+        let mut g = [[Lanes::<W>::splat(0.0); 8]; 3];
+        for (s, b) in self.blocks.iter().enumerate() {
+            let m = [s ^ 1, s ^ 2, s ^ 4];
+            let (x, y, z) = (v[0][m[0]], v[1][m[1]], v[2][m[2]]);
+            for c in 0..3 {
+                g[c][m[c]] = b[3 * c] * x + b[3 * c + 1] * y + b[3 * c + 2] * z;
+            }
+        }
+        // local forces = H^T g.
+        for t in &mut g {
+            for bit in [1, 2, 4] {
+                for i in (0..8).filter(|i| i & bit == 0) {
+                    let (lo, hi) = (t[i], t[i | bit]);
+                    (t[i], t[i | bit]) = (lo - hi, lo + hi);
+                }
+            }
+        }
+        let mut out = [Lanes::<W>::splat(0.0); 24];
+        for a in 0..8 {
+            for c in 0..3 {
+                out[3 * a + c] = g[c][corner(a)];
+            }
+        }
+        out
+    }
+}
+
 /// Where the rotation extraction stops early: every lane's correction below this, radians.
 const ROTATION_EPS: f64 = 1e-12;
 
@@ -114,6 +235,8 @@ pub struct Corotation<'a> {
     pub rest: [&'a [f64]; 3],
     /// The element matrix.
     pub ke: &'a ElementStiffness,
+    /// The element matrix in the corners' parity basis, where it has that form.
+    pub parity: Option<&'a ParityBlocks>,
     /// The grid.
     pub grid: Grid,
     /// Iterations of the rotation extraction per evaluation.
@@ -135,7 +258,12 @@ impl Corotation<'_> {
             let s = NODE_SIGNS[a].map(|s| usize::from(s > 0.0));
             node + s[0] + n * (s[1] + n * s[2])
         };
-        let xa: [V3<W>; 8] = std::array::from_fn(|a| std::array::from_fn(|c| Lanes::load(self.x[c], corner(a))));
+        let mut xa = [[Lanes::<W>::splat(0.0); 3]; 8];
+        for (a, xa) in xa.iter_mut().enumerate() {
+            for (c, v) in xa.iter_mut().enumerate() {
+                *v = Lanes::load(self.x[c], corner(a));
+            }
+        }
         // F[r][c] = sum_a x_a[r] g_a[c], g_a = NODE_SIGNS[a] / 4h.
         let mut f = [[Lanes::<W>::splat(0.0); 3]; 3];
         for (a, x) in xa.iter().enumerate() {
@@ -146,7 +274,12 @@ impl Corotation<'_> {
             }
         }
         let column = |m: &[V3<W>; 3], c: usize| [m[0][c], m[1][c], m[2][c]];
-        let mut q: [Lanes<W>; 4] = std::array::from_fn(|i| Lanes(std::array::from_fn(|l| last[l][i])));
+        let mut q = [Lanes::<W>::splat(0.0); 4];
+        for (l, last) in last.iter().enumerate().take(W) {
+            for i in 0..4 {
+                q[i].0[l] = last[i];
+            }
+        }
         for _ in 0..self.iterations {
             let r = matrix(q);
             let mut axis = [Lanes::splat(0.0); 3];
@@ -166,12 +299,14 @@ impl Corotation<'_> {
             let (w, v) = (q[0], [q[1], q[2], q[3]]);
             let hv = cross(h, v);
             let nw = w - dot(h, v);
-            let nv: V3<W> = std::array::from_fn(|i| v[i] + w * h[i] + hv[i]);
+            let nv: V3<W> = [v[0] + w * h[0] + hv[0], v[1] + w * h[1] + hv[1], v[2] + w * h[2] + hv[2]];
             let inv = (nw * nw + dot(nv, nv)).map(|s| 1.0 / s.sqrt());
             q = [nw * inv, nv[0] * inv, nv[1] * inv, nv[2] * inv];
         }
         for (l, slot) in next.iter_mut().enumerate().take(W) {
-            *slot = std::array::from_fn(|i| q[i].0[l]);
+            for i in 0..4 {
+                slot[i] = q[i].0[l];
+            }
         }
         let r = matrix(q);
         // R^T x_a - X_a.
@@ -182,27 +317,21 @@ impl Corotation<'_> {
                 local[3 * a + c] = rotated - Lanes::load(self.rest[c], corner(a));
             }
         }
-        // K_e local, eight rows at a time (K_e is symmetric: column j is row j).
-        let ke = self.ke.as_slice();
-        let mut fl = [Lanes::<W>::splat(0.0); 24];
-        for block in 0..3 {
-            let mut acc = [Lanes::<W>::splat(0.0); 8];
-            for (j, lj) in local.iter().enumerate() {
-                let col = &ke[24 * j + 8 * block..24 * j + 8 * block + 8];
-                for (acc, &k) in acc.iter_mut().zip(col) {
-                    *acc = *acc + k * *lj;
-                }
-            }
-            fl[8 * block..8 * block + 8].copy_from_slice(&acc);
-        }
-        // R f_local, per node.
+        let fl = match self.parity {
+            Some(parity) => parity.apply(&local),
+            None => dense_product(self.ke, &local),
+        };
+        // R f_local, per node, then out lane by lane.
+        let mut fg = [Lanes::<W>::splat(0.0); 24];
         for a in 0..8 {
             let fa = [fl[3 * a], fl[3 * a + 1], fl[3 * a + 2]];
             for row in 0..3 {
-                let g = dot(r[row], fa);
-                for (l, e) in out.iter_mut().enumerate().take(W) {
-                    e[3 * a + row] = g.0[l];
-                }
+                fg[3 * a + row] = dot(r[row], fa);
+            }
+        }
+        for (l, e) in out.iter_mut().enumerate().take(W) {
+            for (e, g) in e.iter_mut().zip(&fg) {
+                *e = g.0[l];
             }
         }
     }
@@ -308,14 +437,22 @@ mod tests {
         x
     }
 
-    fn forces(grid: Grid, x: &[Vec<f64>; 3], iterations: usize, parallel: bool) -> (Vec<[f64; 4]>, Vec<[f64; 24]>) {
+    fn forces(
+        grid: Grid,
+        x: &[Vec<f64>; 3],
+        iterations: usize,
+        parallel: bool,
+        dense: bool,
+    ) -> (Vec<[f64; 4]>, Vec<[f64; 24]>) {
         let fem = FemModel::new(grid, &Material::object_a());
+        let parity = if dense { None } else { ParityBlocks::of(&fem.ke) };
         let rest: [Vec<f64>; 3] = std::array::from_fn(|c| (0..grid.num_nodes()).map(|p| grid.position(p)[c]).collect());
         let elements = fem.elements().len();
         let at = Corotation {
             x: [&x[0], &x[1], &x[2]],
             rest: [&rest[0], &rest[1], &rest[2]],
             ke: &fem.ke,
+            parity: parity.as_ref(),
             grid,
             iterations,
         };
@@ -329,8 +466,8 @@ mod tests {
         for n in [3, 6, 12] {
             let grid = Grid::new(n).unwrap();
             let x = deformed(&grid, 0.3, 1.0, 0.0);
-            let (q, _) = forces(grid, &x, 0, false);
-            let (q1, f) = forces(grid, &x, 60, false);
+            let (q, _) = forces(grid, &x, 0, false, false);
+            let (q1, f) = forces(grid, &x, 60, false, false);
             assert!(q.iter().all(|q| *q == IDENTITY));
             let worst = f.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
             assert!(worst < 1e-9, "n = {n}: force {worst} N on a rigid turn");
@@ -347,18 +484,20 @@ mod tests {
         for n in [7, 14] {
             let grid = Grid::new(n).unwrap();
             let x = deformed(&grid, 0.2, 1.05, 1e-3);
-            let (q, f) = forces(grid, &x, 2, false);
-            let (qp, fp) = forces(grid, &x, 2, true);
+            let (q, f) = forces(grid, &x, 2, false, false);
+            let (qp, fp) = forces(grid, &x, 2, true, false);
             assert_eq!(q, qp);
             assert_eq!(f, fp);
             // Each element alone (one lane) against its lane in a run.
             let fem = FemModel::new(grid, &Material::object_a());
             let rest: [Vec<f64>; 3] =
                 std::array::from_fn(|c| (0..grid.num_nodes()).map(|p| grid.position(p)[c]).collect());
+            let parity = ParityBlocks::of(&fem.ke);
             let at = Corotation {
                 x: [&x[0], &x[1], &x[2]],
                 rest: [&rest[0], &rest[1], &rest[2]],
                 ke: &fem.ke,
+                parity: parity.as_ref(),
                 grid,
                 iterations: 2,
             };
@@ -368,6 +507,39 @@ mod tests {
                 assert_eq!(next[0], q[e], "element {e}");
                 assert_eq!(out[0], f[e], "element {e}");
             }
+        }
+    }
+
+    #[test]
+    fn the_parity_blocks_are_the_element_matrix() {
+        for material in [Material::object_a(), Material::object_b()] {
+            let ke = FemModel::new(Grid::new(5).unwrap(), &material).ke;
+            let parity = ParityBlocks::of(&ke).expect("an orthotropic cube has the parity form");
+            let local: [Lanes<1>; 24] = std::array::from_fn(|i| Lanes([((i * 7919) % 23) as f64 * 1e-4 - 1e-3]));
+            let (dense, blocks) = (dense_product(&ke, &local), parity.apply(&local));
+            let scale = dense.iter().fold(0.0f64, |m, v| m.max(v.0[0].abs()));
+            for (d, b) in dense.iter().zip(&blocks) {
+                assert!((d.0[0] - b.0[0]).abs() <= 1e-12 * scale, "{} vs {}", d.0[0], b.0[0]);
+            }
+            // Coupling the x displacement of node 0 with the y of node 1 alone breaks the
+            // reflections: no parity form, the dense product instead.
+            let mut skew = ke;
+            skew[(0, 4)] += 1e-3 * scale;
+            skew[(4, 0)] += 1e-3 * scale;
+            assert!(ParityBlocks::of(&skew).is_none());
+        }
+    }
+
+    #[test]
+    fn the_dense_and_the_parity_products_turn_alike() {
+        let grid = Grid::new(9).unwrap();
+        let x = deformed(&grid, 0.4, 1.1, 2e-3);
+        let (q, f) = forces(grid, &x, 2, false, false);
+        let (qd, fd) = forces(grid, &x, 2, false, true);
+        assert_eq!(q, qd, "the rotations do not depend on the product");
+        let scale = fd.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (a, b) in f.iter().flatten().zip(fd.iter().flatten()) {
+            assert!((a - b).abs() <= 1e-12 * scale, "{a} vs {b}");
         }
     }
 }

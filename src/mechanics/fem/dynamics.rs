@@ -11,7 +11,7 @@
 //! while the forces are the full corotational ones. No step allocates.
 
 use super::FemModel;
-use super::corotation::{Corotation, IDENTITY};
+use super::corotation::{Corotation, IDENTITY, ParityBlocks};
 use crate::mechanics::sparse::{SparseError, SpdSystem};
 
 /// How element forces are computed.
@@ -50,6 +50,8 @@ pub struct FemDynamics {
     pub f_ext: Vec<f64>,
     /// Lumped mass of each dof, kg.
     pub mass: Vec<f64>,
+    /// `1 / mass`, 1/kg.
+    pub inv_mass: Vec<f64>,
     /// Mass-proportional damping `C = alpha M`, 1/s.
     pub alpha: f64,
     /// 1.0 for a free dof, 0.0 for a fixed one.
@@ -64,6 +66,8 @@ pub struct FemDynamics {
     /// Positions and rest positions component-wise (`[c][node]`), for the corotated elements.
     x_components: [Vec<f64>; 3],
     rest_components: [Vec<f64>; 3],
+    /// The element matrix in the corners' parity basis, where it has that form.
+    parity: Option<ParityBlocks>,
     /// Each element's corotated force on its eight nodes (filled in parallel, gathered in order).
     element_forces: Vec<[f64; 24]>,
     /// Whether the element loop may use the physics pool ([`crate::mechanics::parallel`]).
@@ -91,6 +95,8 @@ impl FemDynamics {
                 }
             }
         }
+        let inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+        let parity = ParityBlocks::of(&model.ke);
         let elements = model.elements().len();
         Self {
             model,
@@ -99,6 +105,7 @@ impl FemDynamics {
             v: vec![0.0; dofs],
             f_ext: vec![0.0; dofs],
             mass,
+            inv_mass,
             alpha,
             free: vec![1.0; dofs],
             rest,
@@ -108,6 +115,7 @@ impl FemDynamics {
             next_rotations: vec![IDENTITY; elements],
             x_components: std::array::from_fn(|_| vec![0.0; g.num_nodes()]),
             rest_components: std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect()),
+            parity,
             element_forces: vec![[0.0; 24]; elements],
             parallel: true,
             rotation_iterations: ROTATION_ITERATIONS,
@@ -159,6 +167,7 @@ impl FemDynamics {
                     x: [&x[0], &x[1], &x[2]],
                     rest: [&rest[0], &rest[1], &rest[2]],
                     ke: &self.model.ke,
+                    parity: self.parity.as_ref(),
                     grid: self.model.grid,
                     iterations: self.rotation_iterations,
                 };
@@ -184,11 +193,12 @@ impl FemDynamics {
         &self.f
     }
 
-    /// One symplectic Euler step: `v += dt (f / m - alpha v)`, `x += dt v`. Allocation-free.
+    /// One symplectic Euler step: `v += dt (f / m - alpha v)`, `x += dt v` (`1 / m` kept, no
+    /// division). Allocation-free.
     pub fn step_symplectic(&mut self, dt: f64) {
         self.compute_forces();
         for i in 0..self.x.len() {
-            let v = (self.v[i] + dt * (self.f[i] / self.mass[i] - self.alpha * self.v[i])) * self.free[i];
+            let v = (self.v[i] + dt * (self.f[i] * self.inv_mass[i] - self.alpha * self.v[i])) * self.free[i];
             self.v[i] = v;
             self.x[i] += dt * v;
         }

@@ -101,7 +101,7 @@ impl Stencil {
                     .filter(|&o: &usize| {
                         let d = [o % 3, (o / 3) % 3, o / 9];
                         // No neighbour below the low face or above the high one.
-                        (0..3).all(|a| !(s[a] == 0 && d[a] == 0) && !(s[a] == 2 && d[a] == 2))
+                        (0..3).all(|a| (s[a], d[a]) != (0, 0) && (s[a], d[a]) != (2, 2))
                     })
                     .map(|o| {
                         let d = [o % 3, (o / 3) % 3, o / 9].map(|d| d as isize - 1);
