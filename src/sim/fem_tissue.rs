@@ -111,20 +111,14 @@ impl FemTissue {
 }
 
 /// Critical step of symplectic Euler for the FEM cube, on the safe side: `2 / omega_max` with
-/// Gershgorin's bound `omega_max^2 <= max_i sum_j |K_ij| / m_i`, narrowed by the damping to
-/// `2 / alpha`.
+/// the element bound `omega_max^2 <= lambda_max(K_e) / m_e`, narrowed by the damping to
+/// `2 / alpha`. Every element's matrix against its own share of the lumped masses (`m_e = density
+/// h^3 / 8` a node): the cube's lumped masses are the sum of those shares, so `u^T K u = sum_e
+/// u_e^T K_e u_e <= (lambda_max(K_e) / m_e) u^T M u` for any `u`, fixed dofs or not. Tighter than
+/// Gershgorin's bound on the assembled `K` (a cube corner's row alone is at least this).
 fn fem_dt_limit(model: &FemModel, density: f64, alpha: f64) -> f64 {
-    let dofs = 3 * model.grid.num_nodes();
-    let mut row = vec![0.0f64; dofs];
-    let (entries, values) = model.stiffness_entries();
-    for (&(r, c), v) in entries.iter().zip(&values) {
-        row[r] += v.abs();
-        if r != c {
-            row[c] += v.abs();
-        }
-    }
-    let mass = crate::mechanics::msm::model::lumped_masses(&model.grid, density);
-    let lambda = row.iter().enumerate().map(|(d, r)| r / mass[d / 3]).fold(0.0, f64::max);
+    let m_e = density * model.grid.h().powi(3) / 8.0;
+    let lambda = model.ke.symmetric_eigenvalues().max() / m_e;
     let damping_limit = if alpha > 0.0 { 2.0 / alpha } else { f64::INFINITY };
     (2.0 / lambda.sqrt()).min(damping_limit)
 }
@@ -298,6 +292,39 @@ mod tests {
                 assert_eq!(tissue.x()[c][p].to_bits(), reference.x[3 * p + c].to_bits(), "node {p}, {c}");
                 assert_eq!(tissue.v()[c][p].to_bits(), reference.v[3 * p + c].to_bits(), "node {p}, {c}");
             }
+        }
+    }
+
+    #[test]
+    fn the_element_bound_is_above_the_stiffest_mode_and_below_gershgorin() {
+        let material = crate::mechanics::material::Material::object_b();
+        for clamped in [false, true] {
+            let grid = Grid::new(4).unwrap();
+            let model = FemModel::new(grid, &material);
+            let dofs = 3 * grid.num_nodes();
+            let mut k = nalgebra::DMatrix::<f64>::zeros(dofs, dofs);
+            let (entries, values) = model.stiffness_entries();
+            for (&(r, c), v) in entries.iter().zip(&values) {
+                k[(r, c)] += v;
+                if r != c {
+                    k[(c, r)] += v;
+                }
+            }
+            let mass = crate::mechanics::msm::model::lumped_masses(&grid, material.density);
+            let gershgorin =
+                (0..dofs).map(|r| k.row(r).iter().map(|v| v.abs()).sum::<f64>() / mass[r / 3]).fold(0.0, f64::max);
+            // M^-1/2 K M^-1/2 on the free dofs (the bottom face held, or none).
+            let free: Vec<usize> = (0..dofs).filter(|&d| !clamped || grid.position(d / 3)[2] > 0.0).collect();
+            let scaled = nalgebra::DMatrix::from_fn(free.len(), free.len(), |i, j| {
+                k[(free[i], free[j])] / (mass[free[i] / 3] * mass[free[j] / 3]).sqrt()
+            });
+            let stiffest = scaled.symmetric_eigenvalues().max();
+            let bound = (2.0 / fem_dt_limit(&model, material.density, 0.0)).powi(2);
+            assert!(bound >= stiffest * (1.0 - 1e-12), "bound {bound} below omega_max^2 = {stiffest}");
+            assert!(bound <= gershgorin, "bound {bound} above Gershgorin's {gershgorin}");
+            eprintln!(
+                "clamped {clamped}: omega_max^2 {stiffest:.4e}, element bound {bound:.4e}, Gershgorin {gershgorin:.4e}"
+            );
         }
     }
 }

@@ -36,7 +36,8 @@ pub struct BenchReport {
     /// thread and by the element loop (before), seconds.
     pub fem_linear_force_s: BTreeMap<usize, (f64, f64)>,
     /// On one thread and on the physics pool (every core, [`crate::mechanics::parallel`]), keyed
-    /// `linear-force/N` (the stencil's `K u`) and `corotational-step/N` (one symplectic step of
+    /// `linear-force/N` (the stencil's `K u`, interleaved), `linear-force-components/N` (the same
+    /// on the component-wise state the running FEM steps) and `corotational-step/N` (one symplectic step of
     /// the corotational FEM), seconds; and `corotational-step-converged-rotations/N`: one step
     /// with every rotation iterated to convergence (before) and incrementally (now), one thread.
     pub fem_parallel_s: BTreeMap<String, (f64, f64)>,
@@ -163,6 +164,15 @@ fn fem_parallel(material: &Material) -> anyhow::Result<BTreeMap<String, (f64, f6
         let one = time_per_call(0.3, || fem.stencil().apply_on(std::hint::black_box(&u), &mut ku, false));
         let all = time_per_call(0.3, || fem.stencil().apply_on(std::hint::black_box(&u), &mut ku, true));
         out.insert(format!("linear-force/{n}"), (one, all));
+        // The same product on the running FEM's component-wise state (four x-inside nodes at a
+        // time with AVX2).
+        let nn = fem.grid.num_nodes();
+        let split: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|p| u[3 * p + c]).collect());
+        let mut out_c: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
+        let stencil = fem.stencil();
+        let one = time_per_call(0.3, || stencil.apply_components_on(std::hint::black_box(&split), &mut out_c, false));
+        let all = time_per_call(0.3, || stencil.apply_components_on(std::hint::black_box(&split), &mut out_c, true));
+        out.insert(format!("linear-force-components/{n}"), (one, all));
         let mut d = FemDynamics::new(fem, material.density, Formulation::Corotational, 0.0);
         for (x, du) in d.x.iter_mut().zip(&u) {
             *x += du;
