@@ -437,17 +437,17 @@ mod tests {
         x
     }
 
-    fn forces(
+    /// `f` on object A's elements at positions `x` (the dense product where `dense`).
+    fn with_corotation<R>(
         grid: Grid,
         x: &[Vec<f64>; 3],
         iterations: usize,
-        parallel: bool,
         dense: bool,
-    ) -> (Vec<[f64; 4]>, Vec<[f64; 24]>) {
+        f: impl FnOnce(&Corotation<'_>, &FemModel) -> R,
+    ) -> R {
         let fem = FemModel::new(grid, &Material::object_a());
         let parity = if dense { None } else { ParityBlocks::of(&fem.ke) };
         let rest: [Vec<f64>; 3] = std::array::from_fn(|c| (0..grid.num_nodes()).map(|p| grid.position(p)[c]).collect());
-        let elements = fem.elements().len();
         let at = Corotation {
             x: [&x[0], &x[1], &x[2]],
             rest: [&rest[0], &rest[1], &rest[2]],
@@ -456,9 +456,23 @@ mod tests {
             grid,
             iterations,
         };
-        let (last, mut next, mut out) = (vec![IDENTITY; elements], vec![[0.0; 4]; elements], vec![[0.0; 24]; elements]);
-        at.all(&last, &mut next, &mut out, parallel);
-        (next, out)
+        f(&at, &fem)
+    }
+
+    fn forces(
+        grid: Grid,
+        x: &[Vec<f64>; 3],
+        iterations: usize,
+        parallel: bool,
+        dense: bool,
+    ) -> (Vec<[f64; 4]>, Vec<[f64; 24]>) {
+        with_corotation(grid, x, iterations, dense, |at, fem| {
+            let elements = fem.elements().len();
+            let (last, mut next, mut out) =
+                (vec![IDENTITY; elements], vec![[0.0; 4]; elements], vec![[0.0; 24]; elements]);
+            at.all(&last, &mut next, &mut out, parallel);
+            (next, out)
+        })
     }
 
     #[test]
@@ -489,24 +503,14 @@ mod tests {
             assert_eq!(q, qp);
             assert_eq!(f, fp);
             // Each element alone (one lane) against its lane in a run.
-            let fem = FemModel::new(grid, &Material::object_a());
-            let rest: [Vec<f64>; 3] =
-                std::array::from_fn(|c| (0..grid.num_nodes()).map(|p| grid.position(p)[c]).collect());
-            let parity = ParityBlocks::of(&fem.ke);
-            let at = Corotation {
-                x: [&x[0], &x[1], &x[2]],
-                rest: [&rest[0], &rest[1], &rest[2]],
-                ke: &fem.ke,
-                parity: parity.as_ref(),
-                grid,
-                iterations: 2,
-            };
-            for (e, nodes) in fem.elements().iter().enumerate() {
-                let (mut next, mut out) = ([[0.0; 4]], [[0.0; 24]]);
-                at.elements::<1>(nodes[0], &[IDENTITY], &mut next, &mut out);
-                assert_eq!(next[0], q[e], "element {e}");
-                assert_eq!(out[0], f[e], "element {e}");
-            }
+            with_corotation(grid, &x, 2, false, |at, fem| {
+                for (e, nodes) in fem.elements().iter().enumerate() {
+                    let (mut next, mut out) = ([[0.0; 4]], [[0.0; 24]]);
+                    at.elements::<1>(nodes[0], &[IDENTITY], &mut next, &mut out);
+                    assert_eq!(next[0], q[e], "element {e}");
+                    assert_eq!(out[0], f[e], "element {e}");
+                }
+            });
         }
     }
 
