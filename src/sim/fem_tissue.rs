@@ -26,8 +26,7 @@ pub struct FemTissue {
     f_ext: [Vec<f64>; 3],
     forces: [Vec<f64>; 3],
     free: Vec<f64>,
-    /// Rest positions and the displacement buffer of the component-wise step.
-    rest: [Vec<f64>; 3],
+    /// The displacement buffer of the component-wise step.
     u: [Vec<f64>; 3],
     /// 1.0 for a free dof, 0.0 for a fixed one, component-wise.
     free_dofs: [Vec<f64>; 3],
@@ -53,7 +52,6 @@ impl FemTissue {
             f_ext: split(&dynamics.f_ext),
             forces: std::array::from_fn(|_| vec![0.0; nn]),
             free: vec![1.0; nn],
-            rest: split(dynamics.rest()),
             u: std::array::from_fn(|_| vec![0.0; nn]),
             free_dofs: split(&dynamics.free),
             inv_mass: (0..nn).map(|p| dynamics.inv_mass[3 * p]).collect(),
@@ -82,7 +80,7 @@ impl FemTissue {
     pub fn step_linear_symplectic(&mut self, dt: f64) {
         let d = &self.dynamics;
         for c in 0..3 {
-            for ((u, x), r) in self.u[c].iter_mut().zip(&self.x[c]).zip(&self.rest[c]) {
+            for ((u, x), r) in self.u[c].iter_mut().zip(&self.x[c]).zip(&d.rest_components()[c]) {
                 *u = x - r;
             }
         }

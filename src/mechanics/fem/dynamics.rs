@@ -137,6 +137,11 @@ impl FemDynamics {
         &self.rest
     }
 
+    /// Rest positions, component-wise (`[c][node]`).
+    pub fn rest_components(&self) -> &[Vec<f64>; 3] {
+        &self.rest_components
+    }
+
     /// Displacements from rest, interleaved.
     pub fn displacement(&self, out: &mut [f64]) {
         for ((o, x), r) in out.iter_mut().zip(&self.x).zip(&self.rest) {
