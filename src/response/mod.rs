@@ -5,6 +5,8 @@
 //!   probe's sphere geometry and its active-set contact solve.
 //! - [`modes`]: the lowest natural modes of a scene solver; [`modal`]: a model's rest stiffness
 //!   and lumped masses, its modes on any clamp.
+//! - [`stiffest_mode`]: the largest eigenvalue of `M^-1 K` (Lanczos), with an upper estimate
+//!   for the explicit step limits.
 //! - [`damping`]: damping as a ratio `zeta` at the fundamental (mass-proportional Rayleigh
 //!   damping, `C = 2 zeta omega_1 M`); [`single_mode`]: what each integrator does to one damped
 //!   mode, in closed form.
@@ -16,4 +18,5 @@ pub mod linear;
 pub mod modal;
 pub mod modes;
 pub mod single_mode;
+pub mod stiffest_mode;
 pub mod surface_compliance;

@@ -59,8 +59,9 @@ pub fn check_dt(dt: f64) -> Result<(), String> {
 }
 
 /// The automatic choice runs symplectic Euler up to this fraction of the tissue's stability
-/// limit: a margin under the limit's bound on the rest stiffness (Gershgorin's, itself above the
-/// stiffest mode), for springs stretched by a drag, which stiffen across.
+/// limit: a margin under the limit from the rest stiffness's stiffest mode (a Lanczos upper
+/// estimate, capped by a rigorous bound), for springs stretched by a drag, which stiffen across
+/// (0.8 of the step leaves room for `omega_max^2` 1.56 times the rest one).
 pub const AUTO_EXPLICIT_FRACTION: f64 = 0.8;
 /// Symplectic Euler, asked for by name, is accepted up to this fraction of its limit.
 pub const MAX_EXPLICIT_FRACTION: f64 = 0.9;

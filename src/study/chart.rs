@@ -8,7 +8,7 @@
 //!   one unit. Dynamics settle to these static answers, so explicit and implicit points of one
 //!   model and resolution share their error.
 //! * Speed: median wall time of one step (symplectic Euler, or the prefactored backward Euler
-//!   step), one thread; the explicit critical step `2 / omega_max` (power iteration); time of the
+//!   step), one thread; the explicit critical step `2 / omega_max` (Lanczos); time of the
 //!   static answer of one case; bytes held by the state, the model and any factor.
 //! * Models: the mass-spring lattices (the paper's axis springs, shear, hex) with the shipped
 //!   calibrated 8^3 parameters carried to other resolutions by their stiffness scale (`k ~ E L^2 /

@@ -18,9 +18,8 @@ use crate::sim::shipped::msm_params_at;
 use crate::sim::{Integrator, Model};
 use crate::study::timing::{time_fallible, time_per_call};
 
-/// Power iterations for the chart's `omega_max` (the stability study uses more): the Rayleigh
-/// quotient approaches it from below, within a few percent here.
-const CHART_POWER_ITERATIONS: usize = 300;
+/// Lanczos steps for the chart's `omega_max`, at most (the stability study allows more).
+const CHART_LANCZOS_ITERATIONS: usize = 300;
 /// Largest resolution at which the implicit step of a coupled model (shear or hex lattice, FEM)
 /// is measured: its sparse factor grows like `n^6` (several GB and minutes at 32^3 on this
 /// 2-core machine). The axis lattice's rest tangent splits into chains and is measured at any size.
@@ -270,7 +269,7 @@ fn measure_msm(
         .collect::<Result<Vec<_>, _>>()?;
     let static_s = t.elapsed().as_secs_f64() / cs.len() as f64;
     let fixed = cs[0].fixed_nodes();
-    let omega = crate::study::stability::msm_omega_max(&model, &fixed, CHART_POWER_ITERATIONS);
+    let omega = crate::study::stability::msm_omega_max(&model, &fixed, CHART_LANCZOS_ITERATIONS);
     let dt_max = damped_explicit_limit(omega, alpha);
     let mut stepper = Dynamics::new(&model);
     stepper.apply_case(&cs[0]);
@@ -318,7 +317,7 @@ fn measure_fem(
     };
     let static_s = t.elapsed().as_secs_f64() / cs.len() as f64;
     fem.apply_case(&cs[0]);
-    let omega = crate::study::stability::fem_omega_max(&fem, CHART_POWER_ITERATIONS);
+    let omega = crate::study::stability::fem_omega_max(&fem, CHART_LANCZOS_ITERATIONS);
     let dt_max = damped_explicit_limit(omega, alpha);
     let explicit = time_per_call(timing_s, || fem.step_symplectic(0.5 * dt_max));
     let without = fem.memory_bytes() - fem.factor_memory_bytes();

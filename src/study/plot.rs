@@ -171,7 +171,7 @@ pub fn stability_svg(points: &[StabilityPoint]) -> anyhow::Result<String> {
             .map_err(err)?;
         chart
             .configure_mesh()
-            .x_desc("2 / omega_max, s (power iteration on M^-1 K)")
+            .x_desc("2 / omega_max, s (Lanczos on M^-1 K)")
             .y_desc("measured dt_crit, s (bisection)")
             .x_label_formatter(&|v| format!("{v:.0e}"))
             .y_label_formatter(&|v| format!("{v:.0e}"))

@@ -1,6 +1,6 @@
 //! Where explicit integration fails: the critical time step of symplectic Euler, measured by
 //! bisection on `dt` over a fixed number of steps, against the analytic bound `2 / omega_max`
-//! with `omega_max^2` the largest eigenvalue of `M^-1 K` (power iteration on the rest stiffness).
+//! with `omega_max^2` the largest eigenvalue of `M^-1 K` (Lanczos on the rest stiffness).
 //!
 //! Undamped symplectic Euler on a mode of frequency `omega` is stable exactly when
 //! `omega dt < 2`; above that the mode grows by a factor of about `1 + 2 sqrt(2 delta)` per
@@ -8,7 +8,6 @@
 //! [`PERTURBATION_M`] counts as diverged once any node has moved [`GROWTH`] times that much, so
 //! the bisection resolves `dt_crit` to about `1e-5` relative: far finer than the 5 % asked.
 
-use glam::DVec3;
 use rand::{RngExt, SeedableRng, rngs::Xoshiro256PlusPlus};
 
 use crate::mechanics::cases::LoadCase;
@@ -24,78 +23,23 @@ pub const STEPS: usize = 2000;
 pub const PERTURBATION_M: f64 = 1e-9;
 /// Growth of the largest displacement that counts as divergence.
 pub const GROWTH: f64 = 1e6;
-/// Power iterations of the study's `omega_max`.
-pub const STUDY_POWER_ITERATIONS: usize = 3000;
+/// Lanczos steps of the study's `omega_max`, at most.
+pub const STUDY_ITERATIONS: usize = 3000;
+/// The study's `omega_max^2` is converged when the Ritz residual is within this of it.
+pub const STUDY_TOLERANCE: f64 = 1e-8;
 
-/// `K0 u` for the mass-spring model's rest stiffness (`sum k n n^T` over springs), interleaved.
-fn msm_rest_stiffness(model: &MsmModel) -> Vec<(usize, usize, [f64; 3], f64)> {
-    model
-        .springs()
-        .into_iter()
-        .map(|s| {
-            let o = model.families[s.family].family.offset.map(f64::from);
-            let l = DVec3::from(o).length();
-            (s.a, s.b, o.map(|v| v / l), s.k)
-        })
-        .collect()
-}
-
-/// Largest eigenvalue of `M^-1 K` over the free dofs by power iteration on `M^-1/2 K M^-1/2`
-/// (Rayleigh quotient, which approaches it from below), at most `iterations` or until it changes
-/// by less than `1e-10` relative. `apply` computes `K u` (interleaved).
-pub fn lambda_max(mass: &[f64], free: &[bool], iterations: usize, mut apply: impl FnMut(&[f64], &mut [f64])) -> f64 {
-    let n = mass.len();
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
-    let mut v: Vec<f64> = (0..n).map(|i| if free[i] { rng.random::<f64>() - 0.5 } else { 0.0 }).collect();
-    let (mut u, mut w) = (vec![0.0; n], vec![0.0; n]);
-    let mut lambda = 0.0;
-    for it in 0..iterations {
-        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if norm == 0.0 {
-            return 0.0;
-        }
-        for i in 0..n {
-            v[i] /= norm;
-            u[i] = v[i] / mass[i].sqrt();
-        }
-        apply(&u, &mut w);
-        for i in 0..n {
-            w[i] = if free[i] { w[i] / mass[i].sqrt() } else { 0.0 };
-        }
-        let next = v.iter().zip(&w).map(|(a, b)| a * b).sum::<f64>();
-        std::mem::swap(&mut v, &mut w);
-        if it > 50 && (next - lambda).abs() <= 1e-10 * next {
-            return next;
-        }
-        lambda = next;
-    }
-    lambda
-}
-
-/// `omega_max` (rad/s) of a mass-spring model with `fixed` nodes held.
+/// `omega_max` (rad/s) of a mass-spring model with `fixed` nodes held: the Lanczos Ritz value
+/// ([`crate::response::stiffest_mode`]) after at most `iterations` steps, converged to a
+/// residual of `1e-8` of it.
 pub fn msm_omega_max(model: &MsmModel, fixed_nodes: &[bool], iterations: usize) -> f64 {
-    let springs = msm_rest_stiffness(model);
-    let dofs = 3 * model.grid.num_nodes();
-    let free: Vec<bool> = (0..dofs).map(|d| !fixed_nodes[d / 3]).collect();
-    let mass: Vec<f64> = (0..dofs).map(|d| model.masses[d / 3]).collect();
-    lambda_max(&mass, &free, iterations, |u, out| {
-        out.fill(0.0);
-        for &(a, b, n, k) in &springs {
-            let du = [u[3 * b] - u[3 * a], u[3 * b + 1] - u[3 * a + 1], u[3 * b + 2] - u[3 * a + 2]];
-            let s = k * (DVec3::from(n).dot(DVec3::from(du)));
-            for c in 0..3 {
-                out[3 * a + c] -= s * n[c];
-                out[3 * b + c] += s * n[c];
-            }
-        }
-    })
-    .sqrt()
+    crate::response::stiffest_mode::lattice(model, fixed_nodes, STUDY_TOLERANCE, iterations).ritz.sqrt()
 }
 
-/// `omega_max` (rad/s) of a FEM cube (linear stiffness, lumped masses) with its fixed dofs held.
+/// `omega_max` (rad/s) of a FEM cube (linear stiffness, lumped masses) with its fixed dofs held,
+/// as [`msm_omega_max`].
 pub fn fem_omega_max(fem: &FemDynamics, iterations: usize) -> f64 {
     let free: Vec<bool> = fem.free.iter().map(|&f| f != 0.0).collect();
-    lambda_max(&fem.mass, &free, iterations, |u, out| fem.model.apply(u, out)).sqrt()
+    crate::response::stiffest_mode::fem(&fem.model, &fem.mass, &free, STUDY_TOLERANCE, iterations).ritz.sqrt()
 }
 
 /// Whether `STEPS` undamped symplectic steps of `dt` from a fixed random perturbation stay bounded.
@@ -164,7 +108,7 @@ pub struct StabilityPoint {
     pub n: usize,
     /// Factor on every stiffness (springs or material).
     pub stiffness_scale: f64,
-    /// Largest angular frequency, rad/s (power iteration).
+    /// Largest angular frequency, rad/s (Lanczos).
     pub omega_max: f64,
     /// `2 / omega_max`, s.
     pub dt_analytic_s: f64,
@@ -177,7 +121,7 @@ pub struct StabilityPoint {
 /// Measured and analytic critical `dt` of an undamped MSM (one face clamped).
 pub fn msm_point(name: &str, model: &MsmModel, scale: f64) -> StabilityPoint {
     let case = LoadCase::clamped(&model.grid, "A", 1, 0.0);
-    let omega = msm_omega_max(model, &case.fixed_nodes(), STUDY_POWER_ITERATIONS);
+    let omega = msm_omega_max(model, &case.fixed_nodes(), STUDY_ITERATIONS);
     let analytic = 2.0 / omega;
     let measured = bisect_dt(analytic, |dt| msm_stable(model, &case, dt));
     StabilityPoint {
@@ -198,7 +142,7 @@ pub fn fem_point(material: &Material, grid: Grid, scale: f64) -> StabilityPoint 
     let model = FemModel::new(grid, &m);
     let mut fem = FemDynamics::new(model, material.density, Formulation::Linear, 0.0);
     fem.apply_case(&LoadCase::clamped(&grid, "A", 1, 0.0));
-    let omega = fem_omega_max(&fem, STUDY_POWER_ITERATIONS);
+    let omega = fem_omega_max(&fem, STUDY_ITERATIONS);
     let analytic = 2.0 / omega;
     let measured = bisect_dt(analytic, |dt| fem_stable(&mut fem, dt));
     StabilityPoint {
