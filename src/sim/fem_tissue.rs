@@ -307,26 +307,16 @@ mod tests {
             let grid = Grid::new(4).unwrap();
             let model = FemModel::new(grid, &material);
             let dofs = 3 * grid.num_nodes();
-            let mut k = nalgebra::DMatrix::<f64>::zeros(dofs, dofs);
-            let (entries, values) = model.stiffness_entries();
-            for (&(r, c), v) in entries.iter().zip(&values) {
-                k[(r, c)] += v;
-                if r != c {
-                    k[(c, r)] += v;
-                }
-            }
+            let k = model.dense_stiffness();
             let mass = crate::mechanics::msm::model::lumped_masses(&grid, material.density);
             let gershgorin =
                 (0..dofs).map(|r| k.row(r).iter().map(|v| v.abs()).sum::<f64>() / mass[r / 3]).fold(0.0, f64::max);
-            // M^-1/2 K M^-1/2 on the free dofs (the bottom face held, or none).
-            let free: Vec<usize> = (0..dofs).filter(|&d| !clamped || grid.position(d / 3)[2] > 0.0).collect();
-            let scaled = nalgebra::DMatrix::from_fn(free.len(), free.len(), |i, j| {
-                k[(free[i], free[j])] / (mass[free[i] / 3] * mass[free[j] / 3]).sqrt()
-            });
-            let stiffest = scaled.symmetric_eigenvalues().max();
+            // The bottom face held, or none.
+            let free: Vec<bool> = (0..dofs).map(|d| !clamped || grid.position(d / 3)[2] > 0.0).collect();
+            let dof_mass: Vec<f64> = (0..dofs).map(|d| mass[d / 3]).collect();
+            let stiffest = crate::response::stiffest_mode::dense_omega_max_sq(&k, &dof_mass, &free);
             let m_e = material.density * grid.h().powi(3) / 8.0;
             let element = model.ke.symmetric_eigenvalues().max() / m_e;
-            let dof_mass: Vec<f64> = (0..dofs).map(|d| mass[d / 3]).collect();
             let limit = fem_stiffest(&model, material.density, &dof_mass);
             // Estimated with no dof held: above the clamped cube's stiffest mode, at the free one's.
             assert!(limit >= stiffest, "limit's omega_max^2 {limit} below omega_max^2 = {stiffest}");

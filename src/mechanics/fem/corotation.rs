@@ -1,9 +1,9 @@
 //! The corotational hex8 element's force, `f_e = R K_e (R^T x_e - X_e)`, four elements at a time.
 //!
 //! `R` is each element's rotation, kept as a unit quaternion from one force evaluation to the
-//! next and moved towards the polar rotation of the deformation gradient at the element's
-//! centre, `F = sum_a x_a (grad N_a)^T`, by a few iterations of the rotation extraction of Mueller
-//! et al. (2016): `omega = sum_c r_c x f_c / (|sum_c r_c . f_c| + eps)` over the columns of `R`
+//! next and moved to the polar rotation of the deformation gradient at the element's centre,
+//! `F = sum_a x_a (grad N_a)^T`, by iterations of the rotation extraction of Mueller et al. (2016)
+//! until the correction is below a tolerance (`Corotation::tolerance`): `omega = sum_c r_c x f_c / (|sum_c r_c . f_c| + eps)` over the columns of `R`
 //! and `F`, then `R <- exp(omega) R`. Here the exponential is its trig-free first order, the
 //! unit quaternion `(1, omega / 2) / |(1, omega / 2)|` (a turn of `2 atan(|omega| / 2)` about
 //! `omega`, within `|omega|^3 / 12` of `|omega|`); the iteration's fixed point, `omega = 0`, is the
@@ -223,9 +223,6 @@ impl ParityBlocks {
     }
 }
 
-/// Where the rotation extraction stops early: every lane's correction below this, radians.
-const ROTATION_EPS: f64 = 1e-12;
-
 /// What every element's corotated force reads.
 #[derive(Debug, Clone, Copy)]
 pub struct Corotation<'a> {
@@ -239,8 +236,10 @@ pub struct Corotation<'a> {
     pub parity: Option<&'a ParityBlocks>,
     /// The grid.
     pub grid: Grid,
-    /// Iterations of the rotation extraction per evaluation.
+    /// The most iterations of the rotation extraction per evaluation.
     pub iterations: usize,
+    /// Where the extraction stops: every lane's correction `|omega|` at most this, radians.
+    pub tolerance: f64,
 }
 
 /// The identity rotation as a quaternion `[w, x, y, z]`.
@@ -292,7 +291,8 @@ impl Corotation<'_> {
             }
             let scale = denom.map(|d| 0.5 / (d.abs() + f64::EPSILON));
             let h = axis.map(|a| a * scale); // omega / 2
-            if dot(h, h).0.iter().all(|&s| s <= 0.25 * ROTATION_EPS * ROTATION_EPS) {
+            let stop = 0.25 * self.tolerance * self.tolerance;
+            if dot(h, h).0.iter().all(|&s| s <= stop) {
                 break;
             }
             // (1, h) * q, normalised.
@@ -455,6 +455,7 @@ mod tests {
             parity: parity.as_ref(),
             grid,
             iterations,
+            tolerance: 1e-12,
         };
         f(&at, &fem)
     }

@@ -58,6 +58,21 @@ impl FemModel {
         (entries, values)
     }
 
+    /// The assembled stiffness as a dense matrix (small grids, for tests against dense solves).
+    #[cfg(test)]
+    pub fn dense_stiffness(&self) -> nalgebra::DMatrix<f64> {
+        let dofs = 3 * self.grid.num_nodes();
+        let mut k = nalgebra::DMatrix::<f64>::zeros(dofs, dofs);
+        let (entries, values) = self.stiffness_entries();
+        for (&(r, c), v) in entries.iter().zip(&values) {
+            k[(r, c)] += v;
+            if r != c {
+                k[(c, r)] += v;
+            }
+        }
+        k
+    }
+
     /// Builds the element matrix of `material` on `grid`.
     pub fn new(grid: Grid, material: &Material) -> Self {
         let ke = hex8_stiffness(&material.stiffness, grid.h());
