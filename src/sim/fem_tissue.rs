@@ -2,9 +2,10 @@
 //! [`Tissue`]: the same tools, contact and blow-up guard act on it as on a spring lattice.
 //!
 //! The FEM's state is interleaved (`3 node + component`); the simulation's is component-wise
-//! (`x[c][node]`). The component-wise copy is the state between steps. The linear FEM's
-//! symplectic step runs on it directly ([`FemTissue::step_linear_symplectic`], the stencil's
-//! component-wise product: no copies); every other step copies it in and out (no allocation).
+//! (`x[c][node]`). The component-wise copy is the state between steps. Both FEMs' symplectic
+//! steps run on it directly ([`FemTissue::step_linear_symplectic`], the stencil's component-wise
+//! product, and [`FemTissue::step_corotational_symplectic`], the corotated elements read
+//! component-wise: no copies); every other step copies it in and out (no allocation).
 
 use super::explicit_form::{ExplicitForm, ForceForm};
 use super::integrator::Integrator;
@@ -89,13 +90,31 @@ impl FemTissue {
             }
         }
         d.model.stencil().apply_components(&self.u, &mut self.forces);
-        let alpha = d.alpha;
+        for (ku, f_ext) in self.forces.iter_mut().zip(&self.f_ext) {
+            for (ku, f_ext) in ku.iter_mut().zip(f_ext) {
+                *ku = f_ext - *ku;
+            }
+        }
+        self.advance_symplectic(dt);
+    }
+
+    /// One symplectic Euler step of the corotational FEM on the component-wise state, the
+    /// operations of [`FemDynamics::step_symplectic`] in the same order (the same bits), without
+    /// moving the state into the FEM's interleaved layout and back. Allocation-free.
+    pub fn step_corotational_symplectic(&mut self, dt: f64) {
+        let x = [&self.x[0][..], &self.x[1][..], &self.x[2][..]];
+        self.dynamics.corotated_forces_components(x, &self.f_ext, &mut self.forces);
+        self.advance_symplectic(dt);
+    }
+
+    /// `v = (v + dt (f m^-1 - alpha v)) free`, `x += dt v`, with the total force `f` in
+    /// `self.forces`.
+    fn advance_symplectic(&mut self, dt: f64) {
+        let alpha = self.dynamics.alpha;
         for c in 0..3 {
-            let (x, v, f_ext, ku, free) =
-                (&mut self.x[c], &mut self.v[c], &self.f_ext[c], &self.forces[c], &self.free_dofs[c]);
+            let (x, v, f, free) = (&mut self.x[c], &mut self.v[c], &self.forces[c], &self.free_dofs[c]);
             for p in 0..x.len() {
-                let f = f_ext[p] - ku[p];
-                let vel = (v[p] + dt * (f * self.inv_mass[p] - alpha * v[p])) * free[p];
+                let vel = (v[p] + dt * (f[p] * self.inv_mass[p] - alpha * v[p])) * free[p];
                 v[p] = vel;
                 x[p] += dt * vel;
             }
@@ -179,6 +198,11 @@ impl Tissue for FemTissue {
         &self.free
     }
     fn forces(&mut self) -> &[Vec<f64>; 3] {
+        if self.dynamics.formulation == Formulation::Corotational {
+            let x = [&self.x[0][..], &self.x[1][..], &self.x[2][..]];
+            self.dynamics.corotated_forces_components(x, &self.f_ext, &mut self.forces);
+            return &self.forces;
+        }
         self.copy_in();
         let f = self.dynamics.forces();
         for c in 0..3 {
@@ -189,8 +213,11 @@ impl Tissue for FemTissue {
         &self.forces
     }
     fn step(&mut self, integrator: Integrator, dt: f64) -> Result<(), String> {
-        if integrator == Integrator::Symplectic && self.dynamics.formulation == Formulation::Linear {
-            self.step_linear_symplectic(dt);
+        if integrator == Integrator::Symplectic {
+            match self.dynamics.formulation {
+                Formulation::Linear => self.step_linear_symplectic(dt),
+                Formulation::Corotational => self.step_corotational_symplectic(dt),
+            }
             return Ok(());
         }
         self.copy_in();
@@ -270,32 +297,36 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_component_wise_linear_step_is_the_interleaved_one_bit_for_bit() {
+    fn the_component_wise_symplectic_steps_are_the_interleaved_ones_bit_for_bit() {
         let material = crate::mechanics::material::Material::object_a();
         let grid = Grid::new(6).unwrap();
         let mut case = LoadCase::bottom_clamp(&grid, "A");
         // A load on the top corner, so the state moves.
         let corner = grid.num_nodes() - 1;
         case.load[3 * corner..3 * corner + 3].copy_from_slice(&[0.3, -0.2, -1.0]);
-        let mut tissue = FemTissue::new(grid, &material, Formulation::Linear);
-        tissue.set_damping_ratio(0.2).unwrap();
-        tissue.apply_case(&case);
-        let mut reference =
-            FemDynamics::new(FemModel::new(grid, &material), material.density, Formulation::Linear, 0.0);
-        reference.alpha = tissue.dynamics.alpha;
-        reference.apply_case(&case);
-        let dt = 0.5 * tissue.explicit_dt_limit();
-        for _ in 0..200 {
-            tissue.step(Integrator::Symplectic, dt).unwrap();
-            reference.step_symplectic(dt);
-        }
-        let moved =
-            (0..grid.num_nodes()).map(|p| (tissue.x()[2][p] - reference.rest()[3 * p + 2]).abs()).fold(0.0, f64::max);
-        assert!(moved > 1e-6, "the load moved the cube by {moved} m");
-        for p in 0..grid.num_nodes() {
-            for c in 0..3 {
-                assert_eq!(tissue.x()[c][p].to_bits(), reference.x[3 * p + c].to_bits(), "node {p}, {c}");
-                assert_eq!(tissue.v()[c][p].to_bits(), reference.v[3 * p + c].to_bits(), "node {p}, {c}");
+        for formulation in [Formulation::Linear, Formulation::Corotational] {
+            let mut tissue = FemTissue::new(grid, &material, formulation);
+            tissue.set_damping_ratio(0.2).unwrap();
+            tissue.apply_case(&case);
+            let mut reference =
+                FemDynamics::new(FemModel::new(grid, &material), material.density, formulation, 0.0);
+            reference.alpha = tissue.dynamics.alpha;
+            reference.apply_case(&case);
+            let dt = 0.5 * tissue.explicit_dt_limit();
+            for _ in 0..200 {
+                tissue.step(Integrator::Symplectic, dt).unwrap();
+                reference.step_symplectic(dt);
+            }
+            let moved = (0..grid.num_nodes())
+                .map(|p| (tissue.x()[2][p] - reference.rest()[3 * p + 2]).abs())
+                .fold(0.0, f64::max);
+            assert!(moved > 1e-6, "{formulation:?}: the load moved the cube by {moved} m");
+            for p in 0..grid.num_nodes() {
+                for c in 0..3 {
+                    let (x, v) = (reference.x[3 * p + c], reference.v[3 * p + c]);
+                    assert_eq!(tissue.x()[c][p].to_bits(), x.to_bits(), "{formulation:?}: node {p}, {c}");
+                    assert_eq!(tissue.v()[c][p].to_bits(), v.to_bits(), "{formulation:?}: node {p}, {c}");
+                }
             }
         }
     }

@@ -171,18 +171,10 @@ impl FemDynamics {
                         self.x_components[c][p] = x[c];
                     }
                 }
-                let (x, rest) = (&self.x_components, &self.rest_components);
-                let at = Corotation {
-                    x: [&x[0], &x[1], &x[2]],
-                    rest: [&rest[0], &rest[1], &rest[2]],
-                    ke: &self.model.ke,
-                    parity: self.parity.as_ref(),
-                    grid: self.model.grid,
-                    iterations: self.rotation_iterations,
-                    tolerance: self.rotation_tolerance,
-                };
-                at.all(&self.rotations, &mut self.next_rotations, &mut self.element_forces, self.parallel);
-                std::mem::swap(&mut self.rotations, &mut self.next_rotations);
+                // Moved out while the elements read them, and back (moves only: no allocation).
+                let x = std::mem::take(&mut self.x_components);
+                self.corotated_elements([&x[0], &x[1], &x[2]]);
+                self.x_components = x;
                 let elements = self.model.elements();
                 // Gathered in element order on one thread: the same sums, bit for bit, however split.
                 self.f.copy_from_slice(&self.f_ext);
@@ -192,6 +184,41 @@ impl FemDynamics {
                             self.f[3 * p + c] -= fe[3 * a + c];
                         }
                     }
+                }
+            }
+        }
+    }
+
+    /// Every element's rotation moved on and its corotated force into `element_forces`, at the
+    /// component-wise positions `x`.
+    fn corotated_elements(&mut self, x: [&[f64]; 3]) {
+        let rest = &self.rest_components;
+        let at = Corotation {
+            x,
+            rest: [&rest[0], &rest[1], &rest[2]],
+            ke: &self.model.ke,
+            parity: self.parity.as_ref(),
+            grid: self.model.grid,
+            iterations: self.rotation_iterations,
+            tolerance: self.rotation_tolerance,
+        };
+        at.all(&self.rotations, &mut self.next_rotations, &mut self.element_forces, self.parallel);
+        std::mem::swap(&mut self.rotations, &mut self.next_rotations);
+    }
+
+    /// The corotational elastic + external force at the component-wise positions `x`, from the
+    /// component-wise external forces `f_ext`, into `out` (`[c][node]`): the operations of the
+    /// interleaved force in the same order (the same bits), for a step on component-wise state.
+    /// Allocation-free.
+    pub fn corotated_forces_components(&mut self, x: [&[f64]; 3], f_ext: &[Vec<f64>; 3], out: &mut [Vec<f64>; 3]) {
+        self.corotated_elements(x);
+        for (out, f_ext) in out.iter_mut().zip(f_ext) {
+            out.copy_from_slice(f_ext);
+        }
+        for (nodes, fe) in self.model.elements().iter().zip(&self.element_forces) {
+            for (a, &p) in nodes.iter().enumerate() {
+                for (c, out) in out.iter_mut().enumerate() {
+                    out[p] -= fe[3 * a + c];
                 }
             }
         }
