@@ -308,8 +308,7 @@ mod tests {
             let mut tissue = FemTissue::new(grid, &material, formulation);
             tissue.set_damping_ratio(0.2).unwrap();
             tissue.apply_case(&case);
-            let mut reference =
-                FemDynamics::new(FemModel::new(grid, &material), material.density, formulation, 0.0);
+            let mut reference = FemDynamics::new(FemModel::new(grid, &material), material.density, formulation, 0.0);
             reference.alpha = tissue.dynamics.alpha;
             reference.apply_case(&case);
             let dt = 0.5 * tissue.explicit_dt_limit();
