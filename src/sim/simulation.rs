@@ -409,8 +409,6 @@ impl Simulation {
         self.tool_force = dv.map(|d| -m * d / self.dt);
     }
 
-    /// Projects nodes out of the probe sphere, removes their inward velocity, and sums the
-    /// tissue's push on the probe (the inward part of each contact node's spring force).
     /// Whether this step's probe acts by the model's own node contact: with the surface
     /// compliance the hand feels its force, and only a model that cannot carry its loads shows
     /// the press by its own nodes.
@@ -418,6 +416,9 @@ impl Simulation {
         matches!(self.tool, Tool::Probe { .. }) && !(self.probe_on_surface && self.tissue.carries_contact_loads())
     }
 
+    /// Moves nodes inside the probe sphere onto it (along their normal at the step's start),
+    /// gives their velocity that move, removes their inward velocity, and sums the tissue's push
+    /// on the probe (the inward part of each contact node's spring force).
     fn enforce_contact(&mut self) {
         let Tool::Probe { centre, radius } = self.tool else {
             return;
