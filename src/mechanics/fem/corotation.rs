@@ -3,8 +3,9 @@
 //! `R` is each element's rotation, kept as a unit quaternion from one force evaluation to the
 //! next and moved to the polar rotation of the deformation gradient at the element's centre,
 //! `F = sum_a x_a (grad N_a)^T`, by iterations of the rotation extraction of Mueller et al. (2016)
-//! until the correction is below a tolerance (`Corotation::tolerance`): `omega = sum_c r_c x f_c / (|sum_c r_c . f_c| + eps)` over the columns of `R`
-//! and `F`, then `R <- exp(omega) R`. Here the exponential is its trig-free first order, the
+//! until the correction is below a tolerance (`Corotation::tolerance`):
+//! `omega = sum_c r_c x f_c / (|sum_c r_c . f_c| + eps)` over the columns of `R` and `F`, then
+//! `R <- exp(omega) R`. Here the exponential is its trig-free first order, the
 //! unit quaternion `(1, omega / 2) / |(1, omega / 2)|` (a turn of `2 atan(|omega| / 2)` about
 //! `omega`, within `|omega|^3 / 12` of `|omega|`); the iteration's fixed point, `omega = 0`, is the
 //! same polar rotation.
@@ -279,6 +280,7 @@ impl Corotation<'_> {
                 q[i].0[l] = last[i];
             }
         }
+        let stop = 0.25 * self.tolerance * self.tolerance; // on |omega / 2|^2
         for _ in 0..self.iterations {
             let r = matrix(q);
             let mut axis = [Lanes::splat(0.0); 3];
@@ -291,7 +293,6 @@ impl Corotation<'_> {
             }
             let scale = denom.map(|d| 0.5 / (d.abs() + f64::EPSILON));
             let h = axis.map(|a| a * scale); // omega / 2
-            let stop = 0.25 * self.tolerance * self.tolerance;
             if dot(h, h).0.iter().all(|&s| s <= stop) {
                 break;
             }

@@ -175,16 +175,9 @@ impl FemDynamics {
                 let x = std::mem::take(&mut self.x_components);
                 self.corotated_elements([&x[0], &x[1], &x[2]]);
                 self.x_components = x;
-                let elements = self.model.elements();
-                // Gathered in element order on one thread: the same sums, bit for bit, however split.
                 self.f.copy_from_slice(&self.f_ext);
-                for (nodes, fe) in elements.iter().zip(&self.element_forces) {
-                    for (a, &p) in nodes.iter().enumerate() {
-                        for c in 0..3 {
-                            self.f[3 * p + c] -= fe[3 * a + c];
-                        }
-                    }
-                }
+                let f = &mut self.f;
+                gather(self.model.elements(), &self.element_forces, |p, c, fe| f[3 * p + c] -= fe);
             }
         }
     }
@@ -215,13 +208,7 @@ impl FemDynamics {
         for (out, f_ext) in out.iter_mut().zip(f_ext) {
             out.copy_from_slice(f_ext);
         }
-        for (nodes, fe) in self.model.elements().iter().zip(&self.element_forces) {
-            for (a, &p) in nodes.iter().enumerate() {
-                for (c, out) in out.iter_mut().enumerate() {
-                    out[p] -= fe[3 * a + c];
-                }
-            }
-        }
+        gather(self.model.elements(), &self.element_forces, |p, c, fe| out[c][p] -= fe);
     }
 
     /// The elastic + external force at the current positions.
@@ -322,6 +309,18 @@ impl FemDynamics {
             + 6 * 8 * self.rest.len() / 3
             + 24 * 24 * 8;
         vectors + self.factor_memory_bytes()
+    }
+}
+
+/// Hands every element force component to `sub(node, component, value)` in element order, on
+/// one thread: the same sums, bit for bit, however the elements were split, in either layout.
+fn gather(elements: &[[usize; 8]], element_forces: &[[f64; 24]], mut sub: impl FnMut(usize, usize, f64)) {
+    for (nodes, fe) in elements.iter().zip(element_forces) {
+        for (a, &p) in nodes.iter().enumerate() {
+            for c in 0..3 {
+                sub(p, c, fe[3 * a + c]);
+            }
+        }
     }
 }
 
