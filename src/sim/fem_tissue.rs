@@ -164,6 +164,9 @@ impl Tissue for FemTissue {
             free: std::array::from_fn(|c| (0..nn).map(|p| d.free[3 * p + c]).collect()),
         })
     }
+    fn warped_solves(&self) -> Option<crate::mechanics::fem::dynamics::WarpedSolves> {
+        self.dynamics.warped_solves()
+    }
     fn modal(&self) -> Result<crate::response::modal::ModalModel, String> {
         Ok(crate::response::modal::ModalModel::fem(&self.dynamics.model, self.density))
     }

@@ -13,10 +13,13 @@ pub enum Integrator {
     Symplectic,
     /// Linearised backward Euler: stable for any time step, one sparse factorisation per step.
     Implicit,
-    /// Linearised backward Euler with the rest tangent factorised once: one solve per step.
+    /// Linearised backward Euler with the rest tangent factorised once: one solve per step (for
+    /// the corotational FEM, the stiffness warped by the step's rotations, solved by conjugate
+    /// gradients on that factor: [`crate::mechanics::fem::dynamics::WarpedSolves`]).
     Prefactored,
     /// Newmark's average acceleration (the trapezoidal rule) with the rest tangent factorised
-    /// once: one solve per step, no numerical damping, second order.
+    /// once: one solve per step, no numerical damping, second order (for the corotational FEM,
+    /// warped as for [`Integrator::Prefactored`]).
     Newmark,
 }
 

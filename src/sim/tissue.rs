@@ -68,6 +68,12 @@ pub trait Tissue: Send + std::fmt::Debug {
     fn computed_on(&self) -> Option<String> {
         None
     }
+    /// What the corotational FEM's implicit steps' warped solves have done since their factor
+    /// was built ([`crate::mechanics::fem::dynamics::WarpedSolves`]); `None` for every other
+    /// model or before its first implicit step.
+    fn warped_solves(&self) -> Option<crate::mechanics::fem::dynamics::WarpedSolves> {
+        None
+    }
     /// Its symplectic Euler step as plain numbers (for the GPU's step), or why it has none.
     fn explicit_form(&self) -> Result<super::explicit_form::ExplicitForm, String>;
 }

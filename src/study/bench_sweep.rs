@@ -49,6 +49,10 @@ pub struct SweepTick {
     /// Why there is no time, if there is none.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+    /// The corotational FEM's implicit rows: the conjugate-gradient iterations of its warped
+    /// solves over the whole run (press, hold and timed ticks).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warped_solves: Option<crate::mechanics::fem::dynamics::WarpedSolves>,
 }
 
 /// The sweep's results.
@@ -140,17 +144,18 @@ pub fn sweep_model(
             && auto.as_ref().is_some_and(|(i, h, _)| {
                 *i == integrator && substeps.is_some_and(|k| (TICK_S / k as f64 - h).abs() < 1e-15)
             });
-        let (tick_s, note) = match substeps {
+        let (tick_s, note, warped_solves) = match substeps {
             None => (
                 None,
                 Some(format!(
                     "no substep count up to {} is stable and inside the budget",
                     crate::sim::MAX_AUTO_SUBSTEPS
                 )),
+                None,
             ),
             Some(k) => match time_tick(&mut sim, integrator, k) {
-                Ok(t) => (Some(t), None),
-                Err(e) => (None, Some(e)),
+                Ok(t) => (Some(t), None, sim.tissue.warped_solves()),
+                Err(e) => (None, Some(e), sim.tissue.warped_solves()),
             },
         };
         ticks.push(SweepTick {
@@ -162,6 +167,7 @@ pub fn sweep_model(
             automatic,
             tick_s,
             note,
+            warped_solves,
         });
     }
     Ok(())
@@ -238,6 +244,7 @@ pub fn run() -> anyhow::Result<Sweep> {
                         automatic: false,
                         tick_s: None,
                         note: Some(format!("{e:#}")),
+                        warped_solves: None,
                     });
                 }
             }
@@ -269,8 +276,16 @@ impl Sweep {
                 .map_or_else(|| format!("- ({})", t.note.as_deref().unwrap_or("")), |v| format!("{:10.1} us", v * 1e6));
             let k = t.substeps.map_or("-".into(), |k| k.to_string());
             let auto = if t.automatic { " [automatic]" } else { "" };
+            let cg = t.warped_solves.map_or(String::new(), |w| {
+                format!(
+                    " (warped CG: {:.2} a step, at most {}, {} unconverged)",
+                    w.iterations as f64 / w.steps.max(1) as f64,
+                    w.most,
+                    w.unconverged
+                )
+            });
             s += &format!(
-                "  {:<17} {:>2}^3 {:<12} {} x{k:<3} {time}{auto}\n",
+                "  {:<17} {:>2}^3 {:<12} {} x{k:<3} {time}{auto}{cg}\n",
                 t.model, t.nodes, t.integrator, t.compute
             );
         }

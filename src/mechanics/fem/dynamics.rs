@@ -6,9 +6,12 @@
 //! each element's rotation `R` (polar decomposition of the deformation gradient at its centre,
 //! updated incrementally: [`super::corotation`]) and compute `f_e = -R K_e (R^T x_e - X_e)`,
 //! which is zero for any rigid motion. The implicit
-//! step factorises `M (1 + dt alpha) + dt^2 K` once (the linear stiffness), so for the linear
-//! model it is exact backward Euler and for the corotational one the Jacobian is frozen at rest
-//! while the forces are the full corotational ones. No step allocates.
+//! steps factorise `M (1 + dt alpha) + dt^2 K` (or the trapezoidal rule's matrix) once, with the
+//! linear stiffness, so for the linear model each is one exact solve. The corotational model
+//! solves its step's nonlinear equation by Newton's method on the stiffness warped by the
+//! elements' rotations (Mueller et al. 2002: `K_w = sum_e R_e K_e R_e^T`), each linear solve by
+//! conjugate gradients preconditioned with the rest factor ([`WarpedSolves`] counts both). No
+//! step allocates.
 
 use super::FemModel;
 use super::corotation::{Corotation, IDENTITY, ParityBlocks};
@@ -78,10 +81,98 @@ pub struct FemDynamics {
     /// Where the update stops: every correction at most this, radians ([`ROTATION_TOLERANCE`]
     /// by default).
     pub rotation_tolerance: f64,
-    /// The factor, its right-hand side buffer, and the `(dt, alpha, trapezoidal)` it was built
-    /// for.
-    implicit: Option<(SpdSystem, Vec<f64>, (f64, f64, bool))>,
+    /// The most conjugate-gradient iterations of the corotational implicit steps' warped solve
+    /// ([`WARPED_MAX_ITERATIONS`] by default; 0 keeps the rest factor's solve: the Jacobian
+    /// frozen at rest).
+    pub warped_iterations: usize,
+    /// The most Newton corrections of a corotational implicit step ([`NEWTON_MAX_ITERATIONS`] by
+    /// default; 0 keeps the linearised step).
+    pub newton_iterations: usize,
+    /// The implicit steps' factor and buffers.
+    implicit: Option<Implicit>,
 }
+
+/// The factor of an implicit step and its buffers.
+#[derive(Debug)]
+struct Implicit {
+    /// `M (1 + c alpha) + k K` on the free dofs, the fixed ones decoupled, factorised.
+    system: SpdSystem,
+    /// The right-hand side, then the solution.
+    rhs: Vec<f64>,
+    /// The `(dt, alpha, trapezoidal)` it was built for.
+    key: (f64, f64, bool),
+    /// The conjugate gradients' buffers, for the corotational model.
+    krylov: Option<Krylov>,
+}
+
+/// The buffers of the corotational implicit steps' conjugate gradients (interleaved, but
+/// `zeros`) and what they have done since the factor was built.
+#[derive(Debug)]
+struct Krylov {
+    b: Vec<f64>,
+    r: Vec<f64>,
+    z: Vec<f64>,
+    p: Vec<f64>,
+    q: Vec<f64>,
+    /// The step's start positions and force, and a Newton correction.
+    x0: Vec<f64>,
+    f0: Vec<f64>,
+    delta: Vec<f64>,
+    /// Zero rest positions: the corotated element kernel on an increment is `R K_e R^T p_e`.
+    zeros: [Vec<f64>; 3],
+    solves: WarpedSolves,
+}
+
+/// What the corotational implicit steps have done since their factor was built (a new step
+/// size, damping or load case builds it anew).
+///
+/// Each step solves the implicit scheme's nonlinear equation, `a M y = v_s M v + w_n f(x) + w_e
+/// f(x + d(y))` (`y = dx` for the trapezoidal rule, `v'` for backward Euler), by Newton's method
+/// with the warped stiffness `K_w = sum_e R_e K_e R_e^T` as its tangent (stiffness warping,
+/// Mueller et al. 2002: the rotations held, their change left out): first from the step's start
+/// (the linearised scheme), then from each Newton iterate's rotations, until the residual is
+/// [`NEWTON_TOLERANCE`] of the linearised right-hand side `|b|` or
+/// [`FemDynamics::newton_iterations`] corrections are spent. Each linear solve `(a M + k K_w) y =
+/// b` runs conjugate gradients preconditioned with the rest factor (`K_w = K` with every `R_e =
+/// I`), from the rest factor's solve, until the residual is [`WARPED_TOLERANCE`] of `|b|`. Both
+/// stiffnesses are at most `lambda_max(K_e) / m_e` times `M` (the element bound: rotating `K_e`
+/// keeps its spectrum), so the preconditioned matrix's eigenvalues lie within `[1 / (1 + s), 1 +
+/// s]`, `s = k lambda_max(K_e) / (m_e a)`, and the iterations are bounded whatever the rotations;
+/// with none they are 0.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct WarpedSolves {
+    /// Steps taken.
+    pub steps: usize,
+    /// Linear solves (one per step and one per Newton correction).
+    pub solves: usize,
+    /// Conjugate-gradient iterations over all solves (each one warped product and one solve
+    /// with the rest factor).
+    pub iterations: usize,
+    /// The most iterations one solve took.
+    pub most: usize,
+    /// Solves that stopped at [`FemDynamics::warped_iterations`] above the tolerance (their
+    /// solution is the last iterate, closer than the rest factor's in the system's energy norm).
+    pub unconverged: usize,
+    /// Newton corrections over all steps.
+    pub newton: usize,
+    /// The most Newton corrections in one step.
+    pub newton_most: usize,
+    /// Steps whose Newton corrections stopped above [`NEWTON_TOLERANCE`]: at
+    /// [`FemDynamics::newton_iterations`], or where a correction did not lower the residual
+    /// (the iterate before it is kept).
+    pub newton_unconverged: usize,
+}
+
+/// The relative residual `|b - A y| / |b|` where the warped solve stops.
+pub const WARPED_TOLERANCE: f64 = 1e-9;
+/// Where the Newton corrections stop: the nonlinear residual relative to `|b|`.
+pub const NEWTON_TOLERANCE: f64 = 1e-6;
+/// The most Newton corrections of one corotational implicit step
+/// ([`FemDynamics::newton_iterations`]'s default; 0 keeps the linearised step).
+pub const NEWTON_MAX_ITERATIONS: usize = 4;
+/// The most conjugate-gradient iterations of one warped solve
+/// ([`FemDynamics::warped_iterations`]'s default).
+pub const WARPED_MAX_ITERATIONS: usize = 100;
 
 impl FemDynamics {
     /// The cube at rest with lumped masses (`density h^3 / 8` from each element at a node).
@@ -123,6 +214,8 @@ impl FemDynamics {
             parallel: true,
             rotation_iterations: ROTATION_ITERATIONS,
             rotation_tolerance: ROTATION_TOLERANCE,
+            warped_iterations: WARPED_MAX_ITERATIONS,
+            newton_iterations: NEWTON_MAX_ITERATIONS,
             implicit: None,
         }
     }
@@ -230,8 +323,10 @@ impl FemDynamics {
 
     /// One backward Euler step with the linear stiffness factorised once per `dt`:
     /// `(M (1 + dt alpha) + dt^2 K) v' = M v + dt f(x)`, `x += dt v'`. Exact backward Euler for the
-    /// linear model; for the corotational one the forces are corotational and the Jacobian is
-    /// the rest stiffness. The first step (or a new `dt`) factorises; later steps allocate nothing.
+    /// linear model; for the corotational one the step's equation with the force at its end is
+    /// solved by Newton's method on the warped stiffness `K_w`, by conjugate gradients on the
+    /// rest factor ([`WarpedSolves`]). The first step (or a new
+    /// `dt`) factorises; later steps allocate nothing.
     pub fn step_prefactored(&mut self, dt: f64) -> Result<(), SparseError> {
         self.prefactored_step(dt, false)
     }
@@ -240,30 +335,55 @@ impl FemDynamics {
     /// second order) with the linear stiffness factorised once per `dt`:
     /// `(M (1 + dt alpha / 2) + dt^2 / 4 K) dx = dt M v + dt^2 / 2 f(x)`, `v' = 2 dx / dt - v`,
     /// `x += dx`. Exact trapezoidal steps for the linear model; for the corotational one the
-    /// forces are corotational and the Jacobian is the rest stiffness (one solve, no iteration).
+    /// step's equation with the force at its end (`f(x) + f(x + dx)` for `2 f(x)`) is solved by
+    /// Newton's method on the warped stiffness `K_w`, by conjugate gradients on the rest factor
+    /// ([`WarpedSolves`]): the iterations bounded and counted.
     pub fn step_newmark(&mut self, dt: f64) -> Result<(), SparseError> {
         self.prefactored_step(dt, true)
     }
 
     fn prefactored_step(&mut self, dt: f64, trapezoidal: bool) -> Result<(), SparseError> {
         let key = (dt, self.alpha, trapezoidal);
-        // Moved out while the forces are computed, and back in (moves only: no allocation).
-        let work = match self.implicit.take() {
-            Some(work) if work.2 == key => work,
+        // Moved out while the forces are computed and the system solved, and back in (moves
+        // only: no allocation).
+        let mut work = match self.implicit.take() {
+            Some(work) if work.key == key => work,
             stale => {
                 self.implicit = stale; // kept if the new factorisation fails
-                (self.prefactored_system(dt, trapezoidal)?, vec![0.0; self.x.len()], key)
+                let dofs = self.x.len();
+                let nodes = dofs / 3;
+                Implicit {
+                    system: self.prefactored_system(dt, trapezoidal)?,
+                    rhs: vec![0.0; dofs],
+                    key,
+                    krylov: (self.formulation == Formulation::Corotational).then(|| Krylov {
+                        b: vec![0.0; dofs],
+                        r: vec![0.0; dofs],
+                        z: vec![0.0; dofs],
+                        p: vec![0.0; dofs],
+                        q: vec![0.0; dofs],
+                        x0: vec![0.0; dofs],
+                        f0: vec![0.0; dofs],
+                        delta: vec![0.0; dofs],
+                        zeros: std::array::from_fn(|_| vec![0.0; nodes]),
+                        solves: WarpedSolves::default(),
+                    }),
+                }
             }
         };
         self.compute_forces();
-        let (system, rhs, _) = self.implicit.insert(work);
         let (v_scale, f_scale) = if trapezoidal { (dt, 0.5 * dt * dt) } else { (1.0, dt) };
-        for i in 0..rhs.len() {
-            rhs[i] = (v_scale * self.mass[i] * self.v[i] + f_scale * self.f[i]) * self.free[i];
+        for i in 0..work.rhs.len() {
+            work.rhs[i] = (v_scale * self.mass[i] * self.v[i] + f_scale * self.f[i]) * self.free[i];
         }
-        system.solve_in_place(rhs)?;
-        for i in 0..rhs.len() {
-            let solved = rhs[i] * self.free[i];
+        let solved = match work.krylov.as_mut() {
+            Some(krylov) => self.corotational_solve(&mut work.system, &mut work.rhs, krylov, dt, trapezoidal),
+            None => work.system.solve_in_place(&mut work.rhs),
+        };
+        let work = self.implicit.insert(work);
+        solved?;
+        for i in 0..work.rhs.len() {
+            let solved = work.rhs[i] * self.free[i];
             if trapezoidal {
                 self.v[i] = (2.0 * solved / dt - self.v[i]) * self.free[i];
                 self.x[i] += solved;
@@ -275,10 +395,177 @@ impl FemDynamics {
         Ok(())
     }
 
+    /// The corotational implicit step's unknown `y` (`dx` for the trapezoidal rule, `v'` for
+    /// backward Euler) from its linearised right-hand side `b` (given in `y`): the warped solve,
+    /// then Newton corrections on the step's nonlinear equation with the force at the step's end,
+    /// `a M y = v_s M v + w_n f(x) + w_e f(x + d(y))`, until its residual is
+    /// [`NEWTON_TOLERANCE`] of `|b|`, [`FemDynamics::newton_iterations`] are spent, or a
+    /// correction does not lower it (then the iterate before it is kept).
+    fn corotational_solve(
+        &mut self,
+        system: &mut SpdSystem,
+        y: &mut [f64],
+        k: &mut Krylov,
+        dt: f64,
+        trapezoidal: bool,
+    ) -> Result<(), SparseError> {
+        let (c_scale, k_scale) = implicit_scales(dt, trapezoidal);
+        let a = 1.0 + c_scale * self.alpha;
+        let (v_scale, w_n, w_e) = if trapezoidal { (dt, 0.25 * dt * dt, 0.25 * dt * dt) } else { (1.0, 0.0, dt) };
+        let d_scale = if trapezoidal { 1.0 } else { dt };
+        let b_norm = y.iter().map(|b| b * b).sum::<f64>().sqrt();
+        k.solves.steps += 1;
+        self.warped_solve(system, y, k, a, k_scale)?;
+        if self.newton_iterations == 0 {
+            return Ok(());
+        }
+        k.x0.copy_from_slice(&self.x);
+        k.f0.copy_from_slice(&self.f);
+        let (mut newton, mut last) = (0, f64::INFINITY);
+        loop {
+            for i in 0..y.len() {
+                self.x[i] = k.x0[i] + d_scale * y[i] * self.free[i];
+            }
+            self.compute_forces();
+            for i in 0..y.len() {
+                k.r[i] = (v_scale * self.mass[i] * self.v[i] + w_n * k.f0[i] + w_e * self.f[i]
+                    - a * self.mass[i] * y[i])
+                    * self.free[i];
+            }
+            let residual = k.r.iter().map(|r| r * r).sum::<f64>().sqrt();
+            if residual <= NEWTON_TOLERANCE * b_norm {
+                break;
+            }
+            if residual.partial_cmp(&last) != Some(std::cmp::Ordering::Less) {
+                // Not converging (a tangent that leaves out the rotations' change, far from the
+                // solution): back to the last iterate.
+                for (y, d) in y.iter_mut().zip(&k.delta) {
+                    *y -= d;
+                }
+                newton -= 1;
+                k.solves.newton_unconverged += 1;
+                break;
+            }
+            if newton == self.newton_iterations {
+                k.solves.newton_unconverged += 1;
+                break;
+            }
+            last = residual;
+            k.delta.copy_from_slice(&k.r);
+            let mut delta = std::mem::take(&mut k.delta);
+            let solved = self.warped_solve(system, &mut delta, k, a, k_scale);
+            k.delta = delta;
+            solved?;
+            for (y, d) in y.iter_mut().zip(&k.delta) {
+                *y += d;
+            }
+            newton += 1;
+        }
+        self.x.copy_from_slice(&k.x0);
+        k.solves.newton += newton;
+        k.solves.newton_most = k.solves.newton_most.max(newton);
+        Ok(())
+    }
+
+    /// Solves `(m_scale M + k_scale K_w) y = b`, `b` given in `y` and replaced by the solution
+    /// (see [`WarpedSolves`]): conjugate gradients preconditioned with the rest factor `system`,
+    /// from its solve, at most [`FemDynamics::warped_iterations`]. The fixed dofs stay 0.
+    /// Allocation-free.
+    fn warped_solve(
+        &mut self,
+        system: &mut SpdSystem,
+        y: &mut [f64],
+        k: &mut Krylov,
+        m_scale: f64,
+        k_scale: f64,
+    ) -> Result<(), SparseError> {
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
+        k.b.copy_from_slice(y);
+        system.solve_in_place(y)?;
+        // r = b - A y.
+        self.warped_system_product(y, m_scale, k_scale, &k.zeros, &mut k.q);
+        for ((r, b), q) in k.r.iter_mut().zip(&k.b).zip(&k.q) {
+            *r = b - q;
+        }
+        let stop = (WARPED_TOLERANCE * WARPED_TOLERANCE) * dot(&k.b, &k.b);
+        let mut iterations = 0;
+        let mut converged = dot(&k.r, &k.r) <= stop;
+        if !converged {
+            k.z.copy_from_slice(&k.r);
+            system.solve_in_place(&mut k.z)?;
+            k.p.copy_from_slice(&k.z);
+            let mut rz = dot(&k.r, &k.z);
+            while iterations < self.warped_iterations {
+                self.warped_system_product(&k.p, m_scale, k_scale, &k.zeros, &mut k.q);
+                let pq = dot(&k.p, &k.q);
+                if pq.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                    break; // p = 0 to round-off: nothing left to reduce
+                }
+                let step = rz / pq;
+                for ((y, r), (p, q)) in y.iter_mut().zip(k.r.iter_mut()).zip(k.p.iter().zip(&k.q)) {
+                    *y += step * p;
+                    *r -= step * q;
+                }
+                iterations += 1;
+                converged = dot(&k.r, &k.r) <= stop;
+                if converged {
+                    break;
+                }
+                k.z.copy_from_slice(&k.r);
+                system.solve_in_place(&mut k.z)?;
+                let rz_next = dot(&k.r, &k.z);
+                let beta = rz_next / rz;
+                rz = rz_next;
+                for (p, z) in k.p.iter_mut().zip(&k.z) {
+                    *p = z + beta * *p;
+                }
+            }
+        }
+        let s = &mut k.solves;
+        s.solves += 1;
+        s.iterations += iterations;
+        s.most = s.most.max(iterations);
+        s.unconverged += usize::from(!converged);
+        Ok(())
+    }
+
+    /// `out = (m_scale M p + k_scale K_w p)` on the free dofs (0 on the fixed ones), `K_w` the
+    /// stiffness warped by each element's rotation of the last force evaluation. `zeros` is
+    /// borrowed as the zero rest positions of the element kernel.
+    fn warped_system_product(&mut self, p: &[f64], m_scale: f64, k_scale: f64, zeros: &[Vec<f64>; 3], out: &mut [f64]) {
+        for (n, p) in p.chunks_exact(3).enumerate() {
+            for c in 0..3 {
+                self.x_components[c][n] = p[c];
+            }
+        }
+        let at = Corotation {
+            x: [&self.x_components[0], &self.x_components[1], &self.x_components[2]],
+            rest: [&zeros[0], &zeros[1], &zeros[2]],
+            ke: &self.model.ke,
+            parity: self.parity.as_ref(),
+            grid: self.model.grid,
+            iterations: 0,
+            tolerance: self.rotation_tolerance,
+        };
+        // No iteration: `next_rotations` receives the rotations unchanged and is not swapped in.
+        at.all(&self.rotations, &mut self.next_rotations, &mut self.element_forces, self.parallel);
+        out.fill(0.0);
+        gather(self.model.elements(), &self.element_forces, |n, c, fe| out[3 * n + c] += fe);
+        for i in 0..out.len() {
+            out[i] = (k_scale * out[i] + m_scale * self.mass[i] * p[i]) * self.free[i];
+        }
+    }
+
+    /// What the corotational implicit steps' solves have done since their factor was built
+    /// (`None` before the first implicit step, or for the linear model).
+    pub fn warped_solves(&self) -> Option<WarpedSolves> {
+        self.implicit.as_ref()?.krylov.as_ref().map(|k| k.solves)
+    }
+
     /// `M (1 + dt alpha) + dt^2 K` (backward Euler) or `M (1 + dt alpha / 2) + dt^2 / 4 K` (the
     /// trapezoidal rule) with the fixed dofs decoupled, factorised.
     fn prefactored_system(&self, dt: f64, trapezoidal: bool) -> Result<SpdSystem, SparseError> {
-        let (c_scale, k_scale) = if trapezoidal { (0.5 * dt, 0.25 * dt * dt) } else { (dt, dt * dt) };
+        let (c_scale, k_scale) = implicit_scales(dt, trapezoidal);
         let (entries, values) = self.model.stiffness_entries();
         let (mut system, slots) = SpdSystem::new(self.x.len(), &entries)?;
         for (slot, v) in slots.iter().zip(values) {
@@ -298,7 +585,10 @@ impl FemDynamics {
 
     /// Bytes held by the prefactored step's factor (0 before its first step).
     pub fn factor_memory_bytes(&self) -> usize {
-        self.implicit.as_ref().map_or(0, |(s, r, _)| s.memory_bytes() + r.len() * 8)
+        self.implicit.as_ref().map_or(0, |w| {
+            let krylov = w.krylov.as_ref().map_or(0, |k| 6 * k.b.len() * 8);
+            w.system.memory_bytes() + w.rhs.len() * 8 + krylov
+        })
     }
 
     /// Bytes held by the state, the element data and the factor (if built).
@@ -310,6 +600,12 @@ impl FemDynamics {
             + 24 * 24 * 8;
         vectors + self.factor_memory_bytes()
     }
+}
+
+/// The implicit step's `(c, k)` in `M (1 + c alpha) + k K`: `(dt, dt^2)` for backward Euler,
+/// `(dt / 2, dt^2 / 4)` for the trapezoidal rule.
+fn implicit_scales(dt: f64, trapezoidal: bool) -> (f64, f64) {
+    if trapezoidal { (0.5 * dt, 0.25 * dt * dt) } else { (dt, dt * dt) }
 }
 
 /// Hands every element force component to `sub(node, component, value)` in element order, on
@@ -339,3 +635,185 @@ pub const ROTATION_ITERATIONS: usize = 20;
 /// Where the rotation extraction stops: every correction of four elements at most this, radians
 /// ([`FemDynamics::rotation_tolerance`]'s default; see [`ROTATION_ITERATIONS`]).
 pub const ROTATION_TOLERANCE: f64 = 1e-8;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mechanics::grid::Grid;
+    use crate::mechanics::material::Material;
+
+    /// The rotation by `angle` about the unit axis `(1, 2, 2) / 3`, row-major.
+    fn rotation(angle: f64) -> [[f64; 3]; 3] {
+        let k = [1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0];
+        let (s, c) = angle.sin_cos();
+        std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                let cross = match (i, j) {
+                    (0, 1) => -k[2],
+                    (0, 2) => k[1],
+                    (1, 0) => k[2],
+                    (1, 2) => -k[0],
+                    (2, 0) => -k[1],
+                    (2, 1) => k[0],
+                    _ => 0.0,
+                };
+                let delta = if i == j { 1.0 } else { 0.0 };
+                c * delta + s * cross + (1.0 - c) * k[i] * k[j]
+            })
+        })
+    }
+
+    fn rotate(r: &[[f64; 3]; 3], v: &[f64], transpose: bool) -> Vec<f64> {
+        v.chunks_exact(3)
+            .flat_map(|v| {
+                let row = |i: usize| (0..3).map(|j| if transpose { r[j][i] } else { r[i][j] } * v[j]).sum::<f64>();
+                [row(0), row(1), row(2)]
+            })
+            .collect()
+    }
+
+    /// A corotational cube of object B (orthotropic) on 4^3, turned rigidly by `r` about its
+    /// centre, its rotations converged.
+    fn turned(r: &[[f64; 3]; 3]) -> FemDynamics {
+        let m = Material::object_b();
+        let grid = Grid::new(4).unwrap();
+        let mut fem = FemDynamics::new(FemModel::new(grid, &m), m.density, Formulation::Corotational, 0.0);
+        let centred: Vec<f64> = fem.rest.iter().map(|x| x - 0.05).collect();
+        for (x, t) in fem.x.iter_mut().zip(rotate(r, &centred, false)) {
+            *x = t + 0.05;
+        }
+        for _ in 0..20 {
+            fem.forces();
+        }
+        fem
+    }
+
+    #[test]
+    fn the_warped_stiffness_of_a_rigidly_turned_cube_is_the_turned_rest_stiffness() {
+        let r = rotation(0.7);
+        let mut fem = turned(&r);
+        let dofs = fem.x.len();
+        let p: Vec<f64> = (0..dofs).map(|i| (0.37 * i as f64).sin()).collect();
+        let zeros: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; dofs / 3]);
+        let mut warped = vec![0.0; dofs];
+        fem.warped_system_product(&p, 0.0, 1.0, &zeros, &mut warped);
+        // R K R^T p, the rest stiffness in the turned frame.
+        let mut k_local = vec![0.0; dofs];
+        fem.model.apply(&rotate(&r, &p, true), &mut k_local);
+        let want = rotate(&r, &k_local, false);
+        let scale = want.iter().fold(0.0f64, |a, w| a.max(w.abs()));
+        let worst = warped.iter().zip(&want).fold(0.0f64, |a, (w, v)| a.max((w - v).abs()));
+        // The element rotations are the cube's to their tolerance (1e-8 rad).
+        assert!(worst <= 1e-7 * scale, "warped product off by {worst} of {scale}");
+    }
+
+    #[test]
+    fn the_warped_solve_meets_its_tolerance_where_the_rest_factor_alone_does_not() {
+        // A turned cube moving: the step's system is the warped one, far from the rest factor.
+        let r = rotation(0.9);
+        for trapezoidal in [true, false] {
+            let mut fem = turned(&r);
+            fem.newton_iterations = 0; // the linearised step
+            for (i, v) in fem.v.iter_mut().enumerate() {
+                *v = 0.05 * (0.7 * i as f64).cos();
+            }
+            let (v0, x0) = (fem.v.clone(), fem.x.clone());
+            let dt = 1e-3;
+            let step = |fem: &mut FemDynamics| {
+                if trapezoidal { fem.step_newmark(dt) } else { fem.step_prefactored(dt) }.unwrap()
+            };
+            step(&mut fem);
+            let solves = fem.warped_solves().unwrap();
+            assert_eq!((solves.steps, solves.unconverged), (1, 0), "{solves:?}");
+            assert!(solves.most >= 2, "{solves:?}");
+            // The residual of the linearised system at the solution: the step's unknown is
+            // dx (trapezoidal) or v' (backward Euler).
+            let (c_scale, k_scale) = implicit_scales(dt, trapezoidal);
+            let y: Vec<f64> =
+                if trapezoidal { fem.x.iter().zip(&x0).map(|(x, x0)| x - x0).collect() } else { fem.v.clone() };
+            // The rotations and forces of the step's start.
+            let mut start = turned(&r);
+            start.v.copy_from_slice(&v0);
+            let f = start.forces().to_vec();
+            let (v_scale, f_scale) = if trapezoidal { (dt, 0.5 * dt * dt) } else { (1.0, dt) };
+            let b: Vec<f64> = (0..y.len()).map(|i| v_scale * start.mass[i] * v0[i] + f_scale * f[i]).collect();
+            let zeros: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; y.len() / 3]);
+            let mut ay = vec![0.0; y.len()];
+            start.warped_system_product(&y, 1.0 + c_scale * start.alpha, k_scale, &zeros, &mut ay);
+            let norm = |v: &[f64]| v.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let residual: Vec<f64> = b.iter().zip(&ay).map(|(b, a)| b - a).collect();
+            let relative = norm(&residual) / norm(&b);
+            assert!(relative < 1e-8, "trapezoidal {trapezoidal}: residual {relative} of |b|");
+            // The rest factor's solve alone leaves a residual many orders larger.
+            let mut frozen = turned(&r);
+            frozen.v.copy_from_slice(&v0);
+            frozen.newton_iterations = 0;
+            frozen.warped_iterations = 0;
+            step(&mut frozen);
+            let y0: Vec<f64> =
+                if trapezoidal { frozen.x.iter().zip(&x0).map(|(x, x0)| x - x0).collect() } else { frozen.v.clone() };
+            start.warped_system_product(&y0, 1.0 + c_scale * start.alpha, k_scale, &zeros, &mut ay);
+            let residual: Vec<f64> = b.iter().zip(&ay).map(|(b, a)| b - a).collect();
+            let frozen_relative = norm(&residual) / norm(&b);
+            assert!(frozen_relative > 1e3 * relative, "rest factor alone: {frozen_relative}, warped {relative}");
+            eprintln!(
+                "trapezoidal {trapezoidal}: {solves:?}, residual {relative:.2e}, rest factor alone {frozen_relative:.2e}"
+            );
+        }
+    }
+
+    /// The step's nonlinear residual `|v_s M v + w_n f(x) + w_e f(x + d(y)) - a M y| / |b|` of a
+    /// corotational implicit step from `start` (rotations converged) to `end`.
+    fn nonlinear_residual(start: &FemDynamics, end: &FemDynamics, dt: f64, trapezoidal: bool) -> f64 {
+        let mut at_start = FemDynamics::new(start.model.clone(), 1040.0, Formulation::Corotational, 0.0);
+        at_start.mass.copy_from_slice(&start.mass);
+        at_start.x.copy_from_slice(&start.x);
+        let mut at_end = FemDynamics::new(start.model.clone(), 1040.0, Formulation::Corotational, 0.0);
+        at_end.x.copy_from_slice(&end.x);
+        let (f0, f1) = (converged_forces(&mut at_start), converged_forces(&mut at_end));
+        let a = 1.0 + implicit_scales(dt, trapezoidal).0 * start.alpha;
+        let (v_s, w_n, w_e) = if trapezoidal { (dt, 0.25 * dt * dt, 0.25 * dt * dt) } else { (1.0, 0.0, dt) };
+        let (mut r, mut b) = (0.0, 0.0);
+        for i in 0..f0.len() {
+            let y = if trapezoidal { end.x[i] - start.x[i] } else { end.v[i] };
+            let m = start.mass[i];
+            r += (v_s * m * start.v[i] + w_n * f0[i] + w_e * f1[i] - a * m * y).powi(2);
+            b += (v_s * m * start.v[i] + (w_n + w_e) * f0[i]).powi(2);
+        }
+        (r / b).sqrt()
+    }
+
+    fn converged_forces(fem: &mut FemDynamics) -> Vec<f64> {
+        for _ in 0..20 {
+            fem.forces();
+        }
+        fem.forces().to_vec()
+    }
+
+    #[test]
+    fn newtons_corrections_solve_the_steps_equation_with_the_force_at_its_end() {
+        let r = rotation(0.9);
+        for trapezoidal in [true, false] {
+            let mut residuals = Vec::new();
+            for newton in [NEWTON_MAX_ITERATIONS, 0] {
+                let mut fem = turned(&r);
+                fem.newton_iterations = newton;
+                for (i, v) in fem.v.iter_mut().enumerate() {
+                    *v = 0.3 * (0.7 * i as f64).cos();
+                }
+                let start = FemDynamics { x: fem.x.clone(), v: fem.v.clone(), ..turned(&r) };
+                if trapezoidal { fem.step_newmark(1e-3) } else { fem.step_prefactored(1e-3) }.unwrap();
+                let solves = fem.warped_solves().unwrap();
+                assert_eq!((solves.steps, solves.unconverged, solves.newton_unconverged), (1, 0, 0), "{solves:?}");
+                assert!(newton == 0 || solves.newton >= 1, "{solves:?}");
+                residuals.push(nonlinear_residual(&start, &fem, 1e-3, trapezoidal));
+            }
+            eprintln!(
+                "trapezoidal {trapezoidal}: nonlinear residual {:.2e} (Newton), {:.2e} (linearised)",
+                residuals[0], residuals[1]
+            );
+            assert!(residuals[0] <= 2e-6, "trapezoidal {trapezoidal}: residual {} with Newton", residuals[0]);
+            assert!(residuals[1] > 10.0 * residuals[0], "trapezoidal {trapezoidal}: linearised {}", residuals[1]);
+        }
+    }
+}
