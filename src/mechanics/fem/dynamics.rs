@@ -131,7 +131,8 @@ struct Krylov {
 /// with the warped stiffness `K_w = sum_e R_e K_e R_e^T` as its tangent (stiffness warping,
 /// Mueller et al. 2002: the rotations held, their change left out): first from the step's start
 /// (the linearised scheme), then from each Newton iterate's rotations, until the residual is
-/// [`NEWTON_TOLERANCE`] of the linearised right-hand side `|b|` or
+/// [`NEWTON_TOLERANCE`] of its terms' size (`|v_s M v| + (w_n + w_e) (|f| + |f_ext|)`, which
+/// does not vanish at rest) or
 /// [`FemDynamics::newton_iterations`] corrections are spent. Each linear solve `(a M + k K_w) y =
 /// b` runs conjugate gradients preconditioned with the rest factor (`K_w = K` with every `R_e =
 /// I`), from the rest factor's solve, until the residual is [`WARPED_TOLERANCE`] of `|b|`. Both
@@ -164,9 +165,13 @@ pub struct WarpedSolves {
 }
 
 /// The relative residual `|b - A y| / |b|` where the warped solve stops.
-pub const WARPED_TOLERANCE: f64 = 1e-9;
-/// Where the Newton corrections stop: the nonlinear residual relative to `|b|`.
-pub const NEWTON_TOLERANCE: f64 = 1e-6;
+pub const WARPED_TOLERANCE: f64 = 1e-6;
+/// Where the Newton corrections stop: the nonlinear residual relative to its terms' size. A
+/// free 8^3 cube spinning at 10 rad/s takes one correction a 1 ms Newmark step and keeps its
+/// energy within 0.075 % over 0.5 s (linearised, 5.2 % gained); a held press (`bench`'s scene)
+/// leaves 3e-6 to 6e-5 after the linearised step and takes a correction in under a tenth of its
+/// steps.
+pub const NEWTON_TOLERANCE: f64 = 1e-4;
 /// The most Newton corrections of one corotational implicit step
 /// ([`FemDynamics::newton_iterations`]'s default; 0 keeps the linearised step).
 pub const NEWTON_MAX_ITERATIONS: usize = 4;
@@ -399,7 +404,7 @@ impl FemDynamics {
     /// backward Euler) from its linearised right-hand side `b` (given in `y`): the warped solve,
     /// then Newton corrections on the step's nonlinear equation with the force at the step's end,
     /// `a M y = v_s M v + w_n f(x) + w_e f(x + d(y))`, until its residual is
-    /// [`NEWTON_TOLERANCE`] of `|b|`, [`FemDynamics::newton_iterations`] are spent, or a
+    /// [`NEWTON_TOLERANCE`] of its terms' size (`|v_s M v| + (w_n + w_e) (|f| + |f_ext|)`), [`FemDynamics::newton_iterations`] are spent, or a
     /// correction does not lower it (then the iterate before it is kept).
     fn corotational_solve(
         &mut self,
@@ -413,7 +418,16 @@ impl FemDynamics {
         let a = 1.0 + c_scale * self.alpha;
         let (v_scale, w_n, w_e) = if trapezoidal { (dt, 0.25 * dt * dt, 0.25 * dt * dt) } else { (1.0, 0.0, dt) };
         let d_scale = if trapezoidal { 1.0 } else { dt };
-        let b_norm = y.iter().map(|b| b * b).sum::<f64>().sqrt();
+        // The residual's scale: the sizes of the equation's terms, which stay finite at rest
+        // (where `b` itself vanishes and round-off in the elastic force would dominate it).
+        let scale = (0..y.len())
+            .map(|i| {
+                let t =
+                    v_scale * (self.mass[i] * self.v[i]).abs() + (w_n + w_e) * (self.f[i].abs() + self.f_ext[i].abs());
+                (t * self.free[i]).powi(2)
+            })
+            .sum::<f64>()
+            .sqrt();
         k.solves.steps += 1;
         self.warped_solve(system, y, k, a, k_scale)?;
         if self.newton_iterations == 0 {
@@ -433,7 +447,7 @@ impl FemDynamics {
                     * self.free[i];
             }
             let residual = k.r.iter().map(|r| r * r).sum::<f64>().sqrt();
-            if residual <= NEWTON_TOLERANCE * b_norm {
+            if residual <= NEWTON_TOLERANCE * scale {
                 break;
             }
             if residual.partial_cmp(&last) != Some(std::cmp::Ordering::Less) {
@@ -743,7 +757,7 @@ mod tests {
             let norm = |v: &[f64]| v.iter().map(|v| v * v).sum::<f64>().sqrt();
             let residual: Vec<f64> = b.iter().zip(&ay).map(|(b, a)| b - a).collect();
             let relative = norm(&residual) / norm(&b);
-            assert!(relative < 1e-8, "trapezoidal {trapezoidal}: residual {relative} of |b|");
+            assert!(relative < 2.0 * WARPED_TOLERANCE, "trapezoidal {trapezoidal}: residual {relative} of |b|");
             // The rest factor's solve alone leaves a residual many orders larger.
             let mut frozen = turned(&r);
             frozen.v.copy_from_slice(&v0);
@@ -798,8 +812,14 @@ mod tests {
             for newton in [NEWTON_MAX_ITERATIONS, 0] {
                 let mut fem = turned(&r);
                 fem.newton_iterations = newton;
+                // Spinning at 10 rad/s about z, and wobbling.
+                for p in 0..fem.x.len() / 3 {
+                    let (x, y) = (fem.x[3 * p] - 0.05, fem.x[3 * p + 1] - 0.05);
+                    fem.v[3 * p] = -10.0 * y;
+                    fem.v[3 * p + 1] = 10.0 * x;
+                }
                 for (i, v) in fem.v.iter_mut().enumerate() {
-                    *v = 0.3 * (0.7 * i as f64).cos();
+                    *v += 0.05 * (0.7 * i as f64).cos();
                 }
                 let start = FemDynamics { x: fem.x.clone(), v: fem.v.clone(), ..turned(&r) };
                 if trapezoidal { fem.step_newmark(1e-3) } else { fem.step_prefactored(1e-3) }.unwrap();
@@ -812,7 +832,11 @@ mod tests {
                 "trapezoidal {trapezoidal}: nonlinear residual {:.2e} (Newton), {:.2e} (linearised)",
                 residuals[0], residuals[1]
             );
-            assert!(residuals[0] <= 2e-6, "trapezoidal {trapezoidal}: residual {} with Newton", residuals[0]);
+            assert!(
+                residuals[0] <= 5.0 * NEWTON_TOLERANCE,
+                "trapezoidal {trapezoidal}: residual {} with Newton",
+                residuals[0]
+            );
             assert!(residuals[1] > 10.0 * residuals[0], "trapezoidal {trapezoidal}: linearised {}", residuals[1]);
         }
     }
