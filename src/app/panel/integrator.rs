@@ -72,7 +72,10 @@ pub fn show(ui: &mut egui::Ui, shown: &Shown, published: &Published, requests: &
         }
         if ui
             .selectable_value(&mut chosen, Integrator::Prefactored, "implicit, prefactored")
-            .on_hover_text("backward Euler with the rest tangent factorised once: one solve per step")
+            .on_hover_text(
+                "backward Euler with the rest tangent factorised once: one solve per step (the corotational FEM: \
+                 Newton on its warped stiffness, conjugate gradients on that factor)",
+            )
             .changed()
         {
             ask = Some(Some(chosen));
@@ -80,7 +83,8 @@ pub fn show(ui: &mut egui::Ui, shown: &Shown, published: &Published, requests: &
         if ui
             .selectable_value(&mut chosen, Integrator::Newmark, "Newmark, prefactored")
             .on_hover_text(
-                "the trapezoidal rule with the rest tangent factorised once: one solve per step, no numerical damping",
+                "the trapezoidal rule with the rest tangent factorised once: one solve per step, no numerical damping \
+                 (the corotational FEM: Newton on its warped stiffness, conjugate gradients on that factor)",
             )
             .changed()
         {
