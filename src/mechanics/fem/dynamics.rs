@@ -330,8 +330,8 @@ impl FemDynamics {
     /// `(M (1 + dt alpha) + dt^2 K) v' = M v + dt f(x)`, `x += dt v'`. Exact backward Euler for the
     /// linear model; for the corotational one the step's equation with the force at its end is
     /// solved by Newton's method on the warped stiffness `K_w`, by conjugate gradients on the
-    /// rest factor ([`WarpedSolves`]). The first step (or a new
-    /// `dt`) factorises; later steps allocate nothing.
+    /// rest factor ([`WarpedSolves`]). The first step (or a new `dt`) factorises; later steps
+    /// allocate nothing.
     pub fn step_prefactored(&mut self, dt: f64) -> Result<(), SparseError> {
         self.prefactored_step(dt, false)
     }
@@ -404,8 +404,9 @@ impl FemDynamics {
     /// backward Euler) from its linearised right-hand side `b` (given in `y`): the warped solve,
     /// then Newton corrections on the step's nonlinear equation with the force at the step's end,
     /// `a M y = v_s M v + w_n f(x) + w_e f(x + d(y))`, until its residual is
-    /// [`NEWTON_TOLERANCE`] of its terms' size (`|v_s M v| + (w_n + w_e) (|f| + |f_ext|)`), [`FemDynamics::newton_iterations`] are spent, or a
-    /// correction does not lower it (then the iterate before it is kept).
+    /// [`NEWTON_TOLERANCE`] of its terms' size (`|v_s M v| + (w_n + w_e) (|f| + |f_ext|)`),
+    /// [`FemDynamics::newton_iterations`] are spent, or a correction does not lower it (then the
+    /// iterate before it is kept). The positions are the step's start again on return.
     fn corotational_solve(
         &mut self,
         system: &mut SpdSystem,
@@ -469,7 +470,10 @@ impl FemDynamics {
             let mut delta = std::mem::take(&mut k.delta);
             let solved = self.warped_solve(system, &mut delta, k, a, k_scale);
             k.delta = delta;
-            solved?;
+            if let Err(e) = solved {
+                self.x.copy_from_slice(&k.x0);
+                return Err(e);
+            }
             for (y, d) in y.iter_mut().zip(&k.delta) {
                 *y += d;
             }
@@ -600,7 +604,8 @@ impl FemDynamics {
     /// Bytes held by the prefactored step's factor (0 before its first step).
     pub fn factor_memory_bytes(&self) -> usize {
         self.implicit.as_ref().map_or(0, |w| {
-            let krylov = w.krylov.as_ref().map_or(0, |k| 6 * k.b.len() * 8);
+            // Eight vectors of dofs and the zero rest positions (one more).
+            let krylov = w.krylov.as_ref().map_or(0, |k| 9 * k.b.len() * 8);
             w.system.memory_bytes() + w.rhs.len() * 8 + krylov
         })
     }
