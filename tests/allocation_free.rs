@@ -117,42 +117,47 @@ fn explicit_and_implicit_steps_do_not_allocate() {
 }
 
 /// The FEM's steps on the physics pool (the corotational element loop at 12^3, the linear
-/// stencil's slabs at 16^3): splitting the work over the cores allocates nothing either.
+/// stencil's slabs at 16^3), run from a thread of the pool as the viewer's physics loop runs
+/// (`parallel::on_pool`): splitting the work over the cores allocates nothing either. (From
+/// outside the pool each split queues a job in rayon's shared injector, which allocates a block
+/// every 63 calls: 300 corotational symplectic steps at 12^3 allocated 4 times.)
 fn fem_steps_on_the_physics_pool() {
     use tissue_sim::mechanics::fem::FemModel;
     use tissue_sim::mechanics::fem::dynamics::{FemDynamics, Formulation};
+    use tissue_sim::mechanics::parallel::on_pool;
     let material = tissue_sim::mechanics::material::Material::object_a();
     for (n, formulation) in [(12, Formulation::Corotational), (16, Formulation::Linear)] {
         let grid = Grid::new(n).expect("grid");
         let mut fem = FemDynamics::new(FemModel::new(grid, &material), material.density, formulation, 10.0);
         fem.apply_case(&LoadCase::clamped(&grid, "A", 1, 5.0));
-        for _ in 0..5 {
-            fem.step_symplectic(1e-6);
-        }
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
-        for _ in 0..20 {
-            fem.step_symplectic(1e-6);
-        }
-        let parallel = ALLOCATIONS.load(Ordering::Relaxed) - before;
-        assert_eq!(parallel, 0, "allocations in 20 {formulation:?} FEM steps at {n}^3 on the physics pool");
+        let allocated = on_pool(|| {
+            for _ in 0..5 {
+                fem.step_symplectic(1e-6);
+            }
+            let before = ALLOCATIONS.load(Ordering::Relaxed);
+            for _ in 0..200 {
+                fem.step_symplectic(1e-6);
+            }
+            ALLOCATIONS.load(Ordering::Relaxed) - before
+        });
+        assert_eq!(allocated, 0, "allocations in 200 {formulation:?} FEM steps at {n}^3 on the physics pool");
     }
     // The corotational FEM's implicit steps: Newton on the warped stiffness, each solve by
-    // conjugate gradients on the rest factor. On one thread: a call into the physics pool from
-    // outside it queues a job in rayon's injector, which allocates a block every 60-odd calls
-    // (300 symplectic steps above allocated 4 times), and these steps call it once a product.
+    // conjugate gradients on the rest factor, each product split over the pool.
     let grid = Grid::new(12).expect("grid");
     let mut fem = FemDynamics::new(FemModel::new(grid, &material), material.density, Formulation::Corotational, 10.0);
-    fem.parallel = false;
     fem.apply_case(&LoadCase::clamped(&grid, "A", 1, 5.0));
-    for _ in 0..3 {
-        fem.step_newmark(1e-3).expect("the first step builds the factor");
-    }
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
-    for _ in 0..10 {
-        fem.step_newmark(1e-3).expect("Newmark step");
-    }
-    let warped = ALLOCATIONS.load(Ordering::Relaxed) - before;
+    let warped = on_pool(|| {
+        for _ in 0..3 {
+            fem.step_newmark(1e-3).expect("the first step builds the factor");
+        }
+        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        for _ in 0..10 {
+            fem.step_newmark(1e-3).expect("Newmark step");
+        }
+        ALLOCATIONS.load(Ordering::Relaxed) - before
+    });
     let solves = fem.warped_solves().expect("the corotational FEM's warped solves");
     assert!(solves.iterations > 0 && solves.newton > 0, "no conjugate-gradient or Newton iteration ran: {solves:?}");
-    assert_eq!(warped, 0, "allocations in 10 warped Newmark steps of the corotational FEM at 12^3");
+    assert_eq!(warped, 0, "allocations in 10 warped Newmark steps of the corotational FEM at 12^3 on the pool");
 }

@@ -150,7 +150,8 @@ impl PhysicsThread {
                         return;
                     }
                 };
-                run(sim, &rx, &out, ctx);
+                // On the physics pool: each step's splits are then this thread's own tasks.
+                crate::mechanics::parallel::on_pool(move || run(sim, &rx, &out, ctx));
             },
         )?;
         Ok(Self { tx, shared, worker })

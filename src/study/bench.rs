@@ -50,8 +50,6 @@ pub struct BenchReport {
     pub resolution_sweep: super::bench_sweep::Sweep,
 }
 
-/// One 1 ms tick of `model` in the viewer's scene with the probe pressed 4 mm into the top face
-/// (after 0.2 s of settling), stepping `integrator` at `dt`.
 /// How the benchmarked probe touches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum ProbeRun {
@@ -63,7 +61,19 @@ enum ProbeRun {
     SurfaceSliding,
 }
 
+/// One 1 ms tick of `model` in the viewer's scene with the probe pressed 4 mm into the top face
+/// (after 0.2 s of settling), stepping `integrator` at `dt`, on the physics pool as the viewer's
+/// loop runs.
 fn probe_tick(
+    model: crate::sim::Model,
+    integrator: crate::sim::Integrator,
+    dt: f64,
+    run: ProbeRun,
+) -> anyhow::Result<f64> {
+    crate::mechanics::parallel::on_pool(|| probe_tick_here(model, integrator, dt, run))
+}
+
+fn probe_tick_here(
     model: crate::sim::Model,
     integrator: crate::sim::Integrator,
     dt: f64,

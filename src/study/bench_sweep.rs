@@ -85,7 +85,12 @@ fn scene(model: Model, grid: Grid, surface: &MaterialSurface, compute: Compute) 
 /// `sin^2` over 30 ticks (3 where one tick takes over 50 ms) and held for 300 ticks or 1 s of
 /// wall time (at least 2), then the median of ticks timed one by one over about 0.2 s (at least
 /// 3).
+/// On the physics pool, as the viewer's loop runs.
 fn time_tick(sim: &mut Simulation, integrator: Integrator, substeps: usize) -> Result<f64, String> {
+    crate::mechanics::parallel::on_pool(|| time_tick_here(sim, integrator, substeps))
+}
+
+fn time_tick_here(sim: &mut Simulation, integrator: Integrator, substeps: usize) -> Result<f64, String> {
     sim.reset();
     sim.try_set_integrator(Some(integrator), TICK_S / substeps as f64)?;
     let r = crate::validate::touch::PROBE_RADIUS_M;
