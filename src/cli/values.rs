@@ -70,8 +70,8 @@ value_enum!(ColourMode {
 value_enum!(Integrator {
     Symplectic => "symplectic", "Symplectic (semi-implicit) Euler: cheap, stable below a critical time step";
     Implicit => "implicit", "Linearised backward Euler with the tangent of every step (lattices only)";
-    Prefactored => "prefactored", "Linearised backward Euler with the rest tangent factorised once (the corotational FEM: Newton on its warped stiffness, conjugate gradients on that factor)";
-    Newmark => "newmark", "Newmark average acceleration (trapezoidal, no numerical damping) with the rest tangent factorised once (the corotational FEM: as prefactored)";
+    Prefactored => "prefactored", "Backward Euler with the rest tangent factorised once (the lattices and the corotational FEM: Newton on the step's equation, conjugate gradients on that factor)";
+    Newmark => "newmark", "Newmark average acceleration (trapezoidal, no numerical damping) with the rest tangent factorised once (the lattices and the corotational FEM: as prefactored)";
 });
 value_enum!(Compute {
     Cpu => "cpu", "The CPU, in f64";

@@ -5,15 +5,19 @@
 //!   [`displacement_file`]: the spec's JSON of case answers.
 //! - [`sparse`]: faer's sparse Cholesky behind one SPD system type.
 //! - [`fem`]: hex8 statics and dynamics; [`msm`]: the mass-spring lattices, statics and dynamics.
-//! - [`parallel`]: the physics' own thread pool.
+//! - [`parallel`]: the physics' own thread pool; [`anchor`]: a node held by a spring inside an
+//!   implicit step's solve; [`newton_krylov`]: the nonlinear models' implicit steps, Newton by
+//!   conjugate gradients on the rest factor.
 //!
 //! May use: [`crate::io`] only. Knows no simulation, calibration, GPU or command line.
 
+pub mod anchor;
 pub mod cases;
 pub mod displacement_file;
 pub mod fem;
 pub mod grid;
 pub mod material;
 pub mod msm;
+pub mod newton_krylov;
 pub mod parallel;
 pub mod sparse;

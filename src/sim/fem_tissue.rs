@@ -164,8 +164,12 @@ impl Tissue for FemTissue {
             free: std::array::from_fn(|c| (0..nn).map(|p| d.free[3 * p + c]).collect()),
         })
     }
-    fn warped_solves(&self) -> Option<crate::mechanics::fem::dynamics::WarpedSolves> {
-        self.dynamics.warped_solves()
+    fn newton_solves(&self) -> Option<crate::mechanics::newton_krylov::NewtonSolves> {
+        self.dynamics.newton_solves()
+    }
+    fn set_anchor(&mut self, anchor: Option<crate::mechanics::anchor::Anchor>) -> bool {
+        self.dynamics.anchor = anchor;
+        true
     }
     fn modal(&self) -> Result<crate::response::modal::ModalModel, String> {
         Ok(crate::response::modal::ModalModel::fem(&self.dynamics.model, self.density))

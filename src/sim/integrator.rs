@@ -13,13 +13,12 @@ pub enum Integrator {
     Symplectic,
     /// Linearised backward Euler: stable for any time step, one sparse factorisation per step.
     Implicit,
-    /// Linearised backward Euler with the rest tangent factorised once: one solve per step (for
-    /// the corotational FEM, the stiffness warped by the step's rotations, solved by conjugate
-    /// gradients on that factor: [`crate::mechanics::fem::dynamics::WarpedSolves`]).
+    /// Backward Euler with the rest tangent factorised once: one solve per step for the linear
+    /// FEM; the lattices and the corotational FEM solve the step's equation by Newton's method,
+    /// conjugate gradients on that factor ([`crate::mechanics::newton_krylov`]).
     Prefactored,
     /// Newmark's average acceleration (the trapezoidal rule) with the rest tangent factorised
-    /// once: one solve per step, no numerical damping, second order (for the corotational FEM,
-    /// warped as for [`Integrator::Prefactored`]).
+    /// once: no numerical damping, second order; solved as [`Integrator::Prefactored`] is.
     Newmark,
 }
 
@@ -70,8 +69,9 @@ pub const AUTO_EXPLICIT_FRACTION: f64 = 0.8;
 pub const MAX_EXPLICIT_FRACTION: f64 = 0.9;
 
 /// The explicit stability limit a step must respect, s: the tissue's (symplectic Euler on its
-/// stiffest mode). The tools do not bound the step: the dragging spring is a split step,
-/// backward Euler on its node ([`crate::sim::drag_velocity_change`]), and the probe's contact
+/// stiffest mode). The tools do not bound the step: the dragging spring is a split step after
+/// symplectic Euler, backward Euler on its node ([`crate::sim::drag_velocity_change`]), and
+/// inside the implicit schemes' solves ([`crate::mechanics::anchor`]); the probe's contact
 /// acts on positions or through the material's surface compliance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepLimit {
@@ -267,7 +267,8 @@ mod tests {
 
     /// Only the tissue bounds the step: symplectic Euler is substepped to within
     /// [`AUTO_EXPLICIT_FRACTION`] of its limit and refused by name above
-    /// [`MAX_EXPLICIT_FRACTION`]; the implicit schemes run at any step (the drag is a split step).
+    /// [`MAX_EXPLICIT_FRACTION`]; the implicit schemes run at any step (the drag is inside their
+    /// solves).
     #[test]
     fn only_the_tissue_bounds_the_step() {
         let limit = StepLimit::tissue(6e-4);

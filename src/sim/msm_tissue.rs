@@ -82,6 +82,13 @@ impl Tissue for MsmTissue {
     fn modal(&self) -> Result<crate::response::modal::ModalModel, String> {
         crate::response::modal::ModalModel::lattice(&self.model)
     }
+    fn newton_solves(&self) -> Option<crate::mechanics::newton_krylov::NewtonSolves> {
+        self.dynamics.newton_solves()
+    }
+    fn set_anchor(&mut self, anchor: Option<crate::mechanics::anchor::Anchor>) -> bool {
+        self.dynamics.anchor = anchor;
+        true
+    }
     fn grid(&self) -> Grid {
         self.model.grid
     }

@@ -4,7 +4,8 @@
 use super::integrator::{DEFAULT_DYNAMIC_BUDGET, Integrator, StepLimit, choose_step};
 use super::msm_tissue::MsmTissue;
 use super::tissue::Tissue;
-use super::tool::{DRAG_STIFFNESS, Tool, drag_velocity_change};
+use super::tool::{DRAG_DAMPING, DRAG_STIFFNESS, Tool, drag_velocity_change};
+use crate::mechanics::anchor::Anchor;
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::msm::{MsmModel, MsmParams};
 use glam::DVec3;
@@ -212,6 +213,7 @@ impl Simulation {
     /// Advances one step; on a blow-up restores the last good state and says why.
     pub fn step(&mut self) -> Result<(), BlowUp> {
         self.apply_tool_load();
+        let anchored = self.anchor_drag();
         if self.node_contact() {
             let x = self.tissue.x();
             for c in 0..3 {
@@ -220,7 +222,11 @@ impl Simulation {
         }
         let stepped = self.tissue.step(self.integrator, self.dt);
         if stepped.is_ok() {
-            self.drag_step();
+            if anchored {
+                self.anchored_drag_force();
+            } else {
+                self.drag_step();
+            }
         }
         if let Some(probe) = &mut self.surface_probe {
             probe.advance(self.dt);
@@ -386,7 +392,46 @@ impl Simulation {
         }
     }
 
-    /// The dragging spring's split step on its node after the tissue's
+    /// Under an implicit scheme, the dragging spring goes inside the tissue's solve
+    /// ([`crate::mechanics::anchor`]): its node anchored, its pull at the step's start added to
+    /// the node's load. Says whether it did (not under symplectic Euler, on a fixed node or for
+    /// a model without implicit steps: then [`Simulation::drag_step`] follows the step).
+    fn anchor_drag(&mut self) -> bool {
+        let held = match self.tool {
+            Tool::Drag { node, target }
+                if self.integrator != Integrator::Symplectic && self.tissue.free()[node] != 0.0 =>
+            {
+                Some((node, target))
+            }
+            _ => None,
+        };
+        let Some((node, target)) = held else {
+            self.tissue.set_anchor(None);
+            return false;
+        };
+        if !self.tissue.set_anchor(Some(Anchor { node, stiffness: DRAG_STIFFNESS, damping: DRAG_DAMPING })) {
+            return false;
+        }
+        let pull: [f64; 3] = std::array::from_fn(|c| DRAG_STIFFNESS * (target[c] - self.tissue.x()[c][node]));
+        let f_ext = self.tissue.f_ext_mut();
+        for c in 0..3 {
+            f_ext[c][node] += pull[c];
+        }
+        true
+    }
+
+    /// The anchored drag's force on the hand: minus the spring and damper's on the node at the
+    /// step's end.
+    fn anchored_drag_force(&mut self) {
+        let Tool::Drag { node, target } = self.tool else {
+            return;
+        };
+        let (x, v) = (self.tissue.x(), self.tissue.v());
+        self.tool_force =
+            std::array::from_fn(|c| -(DRAG_STIFFNESS * (target[c] - x[c][node]) - DRAG_DAMPING * v[c][node]));
+    }
+
+    /// The dragging spring's split step on its node after the tissue's symplectic Euler step
     /// ([`drag_velocity_change`]), and its force on the hand. A fixed node does not move: the
     /// hand feels the spring's static pull.
     fn drag_step(&mut self) {

@@ -68,11 +68,19 @@ pub trait Tissue: Send + std::fmt::Debug {
     fn computed_on(&self) -> Option<String> {
         None
     }
-    /// What the corotational FEM's implicit steps' warped solves have done since their factor
-    /// was built ([`crate::mechanics::fem::dynamics::WarpedSolves`]); `None` for every other
-    /// model or before its first implicit step.
-    fn warped_solves(&self) -> Option<crate::mechanics::fem::dynamics::WarpedSolves> {
+    /// What the prefactored implicit steps' Newton corrections and conjugate gradients have done
+    /// since their factor was built ([`crate::mechanics::newton_krylov::NewtonSolves`]): the
+    /// corotational FEM's and the lattices'; `None` for the linear FEM (one exact solve a step)
+    /// or before the first prefactored step.
+    fn newton_solves(&self) -> Option<crate::mechanics::newton_krylov::NewtonSolves> {
         None
+    }
+    /// Holds a node by a spring and damper inside its implicit steps' solves (`None` lets go;
+    /// the pull at the step's start is the caller's, in [`Tissue::f_ext_mut`]), and says whether
+    /// it does: a model without implicit steps leaves the drag to the caller's split step.
+    fn set_anchor(&mut self, anchor: Option<crate::mechanics::anchor::Anchor>) -> bool {
+        let _ = anchor;
+        false
     }
     /// Its symplectic Euler step as plain numbers (for the GPU's step), or why it has none.
     fn explicit_form(&self) -> Result<super::explicit_form::ExplicitForm, String>;

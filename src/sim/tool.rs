@@ -32,7 +32,10 @@ pub const DRAG_DAMPING: f64 = 1.0;
 /// - c v)`, then `v += dv`, `x += dt dv`. Applied after the tissue's step (a split step), it is
 /// stable at any step on any node, so the drag does not bound the step (its damper alone, applied
 /// explicitly, held a cube corner's step at 16^3 to 70 us); at rest the pull balances the
-/// tissue exactly (`k (target - x)` at any step). The force on the hand is `-m dv / dt`.
+/// tissue exactly (`k (target - x)` at any step). The force on the hand is `-m dv / dt`. It
+/// follows symplectic Euler only; the implicit schemes carry the spring inside their solves
+/// ([`crate::mechanics::anchor`]), where a split step left a trapezoidal step's held node a
+/// steady velocity of `dt f / (2 m)`.
 pub fn drag_velocity_change(target: [f64; 3], x: [f64; 3], v: [f64; 3], node_mass: f64, dt: f64) -> [f64; 3] {
     let (k, c) = (DRAG_STIFFNESS / node_mass, DRAG_DAMPING / node_mass);
     let scale = dt / (1.0 + dt * c + dt * dt * k);

@@ -19,8 +19,8 @@ pub struct BenchReport {
     pub msm_shear_explicit_step_s: BTreeMap<usize, f64>,
     /// One linearised implicit Euler step (assembly + factorisation + solve), keyed by nodes per axis.
     pub msm_implicit_step_s: BTreeMap<usize, f64>,
-    /// One prefactored implicit Euler step (force pass + one solve with the rest tangent factorised
-    /// once), paper's model, keyed by nodes per axis.
+    /// One prefactored implicit Euler step (force pass, one solve with the rest tangent factorised
+    /// once, and Newton's check of the step's equation), paper's model, keyed by nodes per axis.
     pub msm_prefactored_step_s: BTreeMap<usize, f64>,
     /// The same for the hex-element lattice (object A's shipped tissue).
     pub msm_hex_prefactored_step_s: BTreeMap<usize, f64>,

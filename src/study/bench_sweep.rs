@@ -52,7 +52,7 @@ pub struct SweepTick {
     /// The corotational FEM's implicit rows: the conjugate-gradient iterations of its warped
     /// solves over the whole run (press, hold and timed ticks).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub warped_solves: Option<crate::mechanics::fem::dynamics::WarpedSolves>,
+    pub newton_solves: Option<crate::mechanics::newton_krylov::NewtonSolves>,
 }
 
 /// The sweep's results.
@@ -149,7 +149,7 @@ pub fn sweep_model(
             && auto.as_ref().is_some_and(|(i, h, _)| {
                 *i == integrator && substeps.is_some_and(|k| (TICK_S / k as f64 - h).abs() < 1e-15)
             });
-        let (tick_s, note, warped_solves) = match substeps {
+        let (tick_s, note, newton_solves) = match substeps {
             None => (
                 None,
                 Some(format!(
@@ -159,8 +159,8 @@ pub fn sweep_model(
                 None,
             ),
             Some(k) => match time_tick(&mut sim, integrator, k) {
-                Ok(t) => (Some(t), None, sim.tissue.warped_solves()),
-                Err(e) => (None, Some(e), sim.tissue.warped_solves()),
+                Ok(t) => (Some(t), None, sim.tissue.newton_solves()),
+                Err(e) => (None, Some(e), sim.tissue.newton_solves()),
             },
         };
         ticks.push(SweepTick {
@@ -172,7 +172,7 @@ pub fn sweep_model(
             automatic,
             tick_s,
             note,
-            warped_solves,
+            newton_solves,
         });
     }
     Ok(())
@@ -249,7 +249,7 @@ pub fn run() -> anyhow::Result<Sweep> {
                         automatic: false,
                         tick_s: None,
                         note: Some(format!("{e:#}")),
-                        warped_solves: None,
+                        newton_solves: None,
                     });
                 }
             }
@@ -281,7 +281,7 @@ impl Sweep {
                 .map_or_else(|| format!("- ({})", t.note.as_deref().unwrap_or("")), |v| format!("{:10.1} us", v * 1e6));
             let k = t.substeps.map_or("-".into(), |k| k.to_string());
             let auto = if t.automatic { " [automatic]" } else { "" };
-            let cg = t.warped_solves.map_or(String::new(), |w| {
+            let cg = t.newton_solves.map_or(String::new(), |w| {
                 format!(
                     " (warped CG: {:.2} a step, at most {}, {} unconverged)",
                     w.iterations as f64 / w.steps.max(1) as f64,

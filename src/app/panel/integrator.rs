@@ -73,8 +73,9 @@ pub fn show(ui: &mut egui::Ui, shown: &Shown, published: &Published, requests: &
         if ui
             .selectable_value(&mut chosen, Integrator::Prefactored, "implicit, prefactored")
             .on_hover_text(
-                "backward Euler with the rest tangent factorised once: one solve per step (the corotational FEM: \
-                 Newton on its warped stiffness, conjugate gradients on that factor)",
+                "backward Euler with the rest tangent factorised once: one solve per step for the linear FEM; the \
+                 lattices and the corotational FEM solve the step's equation by Newton, conjugate gradients on \
+                 that factor. A drag is held inside the solve",
             )
             .changed()
         {
@@ -83,8 +84,9 @@ pub fn show(ui: &mut egui::Ui, shown: &Shown, published: &Published, requests: &
         if ui
             .selectable_value(&mut chosen, Integrator::Newmark, "Newmark, prefactored")
             .on_hover_text(
-                "the trapezoidal rule with the rest tangent factorised once: one solve per step, no numerical damping \
-                 (the corotational FEM: Newton on its warped stiffness, conjugate gradients on that factor)",
+                "the trapezoidal rule with the rest tangent factorised once, no numerical damping: one solve per \
+                 step for the linear FEM; the lattices and the corotational FEM solve the step's equation by \
+                 Newton, conjugate gradients on that factor. A drag is held inside the solve",
             )
             .changed()
         {

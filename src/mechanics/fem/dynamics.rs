@@ -10,11 +10,16 @@
 //! linear stiffness, so for the linear model each is one exact solve. The corotational model
 //! solves its step's nonlinear equation by Newton's method on the stiffness warped by the
 //! elements' rotations (Mueller et al. 2002: `K_w = sum_e R_e K_e R_e^T`), each linear solve by
-//! conjugate gradients preconditioned with the rest factor ([`WarpedSolves`] counts both). No
-//! step allocates.
+//! conjugate gradients preconditioned with the rest factor ([`NewtonSolves`] counts both). A
+//! held node ([`FemDynamics::anchor`]) is carried inside the implicit steps' solves
+//! ([`crate::mechanics::anchor`]). No step allocates.
 
 use super::FemModel;
 use super::corotation::{Corotation, IDENTITY, ParityBlocks};
+use crate::mechanics::anchor::{Anchor, AnchoredSolve};
+use crate::mechanics::newton_krylov::{
+    KRYLOV_MAX_ITERATIONS, NEWTON_MAX_ITERATIONS, NewtonKrylov, NewtonSolves, StepEquation,
+};
 use crate::mechanics::sparse::{SparseError, SpdSystem};
 
 /// How element forces are computed.
@@ -82,12 +87,16 @@ pub struct FemDynamics {
     /// by default).
     pub rotation_tolerance: f64,
     /// The most conjugate-gradient iterations of the corotational implicit steps' warped solve
-    /// ([`WARPED_MAX_ITERATIONS`] by default; 0 keeps the rest factor's solve: the Jacobian
+    /// ([`KRYLOV_MAX_ITERATIONS`] by default; 0 keeps the rest factor's solve: the Jacobian
     /// frozen at rest).
-    pub warped_iterations: usize,
+    pub krylov_iterations: usize,
     /// The most Newton corrections of a corotational implicit step ([`NEWTON_MAX_ITERATIONS`] by
     /// default; 0 keeps the linearised step).
     pub newton_iterations: usize,
+    /// A node held by a spring and damper, carried inside the implicit steps' solves (its pull at
+    /// the step's start is the caller's, in `f_ext`); the symplectic step leaves it to its
+    /// caller. Ignored on a fixed node.
+    pub anchor: Option<Anchor>,
     /// The implicit steps' factor and buffers.
     implicit: Option<Implicit>,
 }
@@ -95,8 +104,8 @@ pub struct FemDynamics {
 /// The factor of an implicit step and its buffers.
 #[derive(Debug)]
 struct Implicit {
-    /// `M (1 + c alpha) + k K` on the free dofs, the fixed ones decoupled, factorised.
-    system: SpdSystem,
+    /// The factor, corrected for the anchor.
+    factor: Factor,
     /// The right-hand side, then the solution.
     rhs: Vec<f64>,
     /// The `(dt, alpha, trapezoidal)` it was built for.
@@ -105,79 +114,87 @@ struct Implicit {
     krylov: Option<Krylov>,
 }
 
-/// The buffers of the corotational implicit steps' conjugate gradients (interleaved, but
-/// `zeros`) and what they have done since the factor was built.
+/// `M (1 + c alpha) + k K` on the free dofs, the fixed ones decoupled, factorised, and its
+/// correction for the held node.
+#[derive(Debug)]
+struct Factor {
+    system: SpdSystem,
+    anchored: AnchoredSolve,
+    /// This step's held node: its first dof and what the anchor adds to its three diagonal
+    /// entries.
+    held: Option<(usize, f64)>,
+}
+
+impl Factor {
+    /// Solves the anchored system in place.
+    fn solve(&mut self, y: &mut [f64]) -> Result<(), SparseError> {
+        self.system.solve_in_place(y)?;
+        if self.held.is_some() {
+            self.anchored.correct(y);
+        }
+        Ok(())
+    }
+
+    /// Adds the anchor's `d y` on the held node's dofs to `out`, scaled by `sign`.
+    fn add_held(&self, y: &[f64], sign: f64, out: &mut [f64]) {
+        if let Some((first, d)) = self.held {
+            for i in first..first + 3 {
+                out[i] += sign * d * y[i];
+            }
+        }
+    }
+}
+
+/// The corotational implicit steps' solver ([`crate::mechanics::newton_krylov`]) and buffers
+/// (interleaved, but `zeros`).
 #[derive(Debug)]
 struct Krylov {
-    b: Vec<f64>,
-    r: Vec<f64>,
-    z: Vec<f64>,
-    p: Vec<f64>,
-    q: Vec<f64>,
-    /// The step's start positions and force, and a Newton correction.
+    newton: NewtonKrylov,
+    /// The step's start positions and force.
     x0: Vec<f64>,
     f0: Vec<f64>,
-    delta: Vec<f64>,
     /// Zero rest positions: the corotated element kernel on an increment is `R K_e R^T p_e`.
     zeros: [Vec<f64>; 3],
-    solves: WarpedSolves,
 }
 
-/// What the corotational implicit steps have done since their factor was built (a new step
-/// size, damping or load case builds it anew).
-///
-/// Each step solves the implicit scheme's nonlinear equation, `a M y = v_s M v + w_n f(x) + w_e
-/// f(x + d(y))` (`y = dx` for the trapezoidal rule, `v'` for backward Euler), by Newton's method
-/// with the warped stiffness `K_w = sum_e R_e K_e R_e^T` as its tangent (stiffness warping,
-/// Mueller et al. 2002: the rotations held, their change left out): first from the step's start
-/// (the linearised scheme), then from each Newton iterate's rotations, until the residual is
-/// [`NEWTON_TOLERANCE`] of its terms' size (`|v_s M v| + (w_n + w_e) (|f| + |f_ext|)`, which
-/// does not vanish at rest) or
-/// [`FemDynamics::newton_iterations`] corrections are spent. Each linear solve `(a M + k K_w) y =
-/// b` runs conjugate gradients preconditioned with the rest factor (`K_w = K` with every `R_e =
-/// I`), from the rest factor's solve, until the residual is [`WARPED_TOLERANCE`] of `|b|`. Both
-/// stiffnesses are at most `lambda_max(K_e) / m_e` times `M` (the element bound: rotating `K_e`
-/// keeps its spectrum), so the preconditioned matrix's eigenvalues lie within `[1 / (1 + s), 1 +
-/// s]`, `s = k lambda_max(K_e) / (m_e a)`, and the iterations are bounded whatever the rotations;
-/// with none they are 0.
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-pub struct WarpedSolves {
-    /// Steps taken.
-    pub steps: usize,
-    /// Linear solves (one per step and one per Newton correction).
-    pub solves: usize,
-    /// Conjugate-gradient iterations over all solves (each one warped product and one solve
-    /// with the rest factor).
-    pub iterations: usize,
-    /// The most iterations one solve took.
-    pub most: usize,
-    /// Solves that stopped at [`FemDynamics::warped_iterations`] above the tolerance (their
-    /// solution is the last iterate, closer than the rest factor's in the system's energy norm).
-    pub unconverged: usize,
-    /// Newton corrections over all steps.
-    pub newton: usize,
-    /// The most Newton corrections in one step.
-    pub newton_most: usize,
-    /// Steps whose Newton corrections stopped above [`NEWTON_TOLERANCE`]: at
-    /// [`FemDynamics::newton_iterations`], or where a correction did not lower the residual
-    /// (the iterate before it is kept).
-    pub newton_unconverged: usize,
+/// The corotational implicit step's equation for [`NewtonKrylov`]: the tangent is the stiffness
+/// warped by the elements' rotations of the last force evaluation, `K_w = sum_e R_e K_e R_e^T`
+/// (Mueller et al. 2002), the preconditioner the rest factor, both with the held node's anchor.
+struct CorotationalStep<'a> {
+    fem: &'a mut FemDynamics,
+    factor: &'a mut Factor,
+    x0: &'a [f64],
+    f0: &'a [f64],
+    zeros: &'a [Vec<f64>; 3],
+    /// `a` (mass), `k` (stiffness), `v_s`, `w_n`, `w_e` and the position's scale `d` of `y`.
+    scales: [f64; 6],
 }
 
-/// The relative residual `|b - A y| / |b|` where the warped solve stops.
-pub const WARPED_TOLERANCE: f64 = 1e-6;
-/// Where the Newton corrections stop: the nonlinear residual relative to its terms' size. A
-/// free 8^3 cube spinning at 10 rad/s takes one correction a 1 ms Newmark step and keeps its
-/// energy within 0.075 % over 0.5 s (linearised, 5.2 % gained); a held press (`bench`'s scene)
-/// leaves 3e-6 to 6e-5 after the linearised step and takes a correction in under a tenth of its
-/// steps.
-pub const NEWTON_TOLERANCE: f64 = 1e-4;
-/// The most Newton corrections of one corotational implicit step
-/// ([`FemDynamics::newton_iterations`]'s default; 0 keeps the linearised step).
-pub const NEWTON_MAX_ITERATIONS: usize = 4;
-/// The most conjugate-gradient iterations of one warped solve
-/// ([`FemDynamics::warped_iterations`]'s default).
-pub const WARPED_MAX_ITERATIONS: usize = 100;
+impl StepEquation for CorotationalStep<'_> {
+    fn residual(&mut self, y: &[f64], r: &mut [f64]) {
+        let [a, _, v_scale, w_n, w_e, d_scale] = self.scales;
+        let fem = &mut *self.fem;
+        for i in 0..y.len() {
+            fem.x[i] = self.x0[i] + d_scale * y[i] * fem.free[i];
+        }
+        fem.compute_forces();
+        for i in 0..y.len() {
+            r[i] = (v_scale * fem.mass[i] * fem.v[i] + w_n * self.f0[i] + w_e * fem.f[i] - a * fem.mass[i] * y[i])
+                * fem.free[i];
+        }
+        self.factor.add_held(y, -1.0, r);
+    }
+
+    fn product(&mut self, p: &[f64], out: &mut [f64]) {
+        let [a, k_scale, ..] = self.scales;
+        self.fem.warped_system_product(p, a, k_scale, self.zeros, out);
+        self.factor.add_held(p, 1.0, out);
+    }
+
+    fn precondition(&mut self, z: &mut [f64]) -> Result<(), SparseError> {
+        self.factor.solve(z)
+    }
+}
 
 impl FemDynamics {
     /// The cube at rest with lumped masses (`density h^3 / 8` from each element at a node).
@@ -219,8 +236,9 @@ impl FemDynamics {
             parallel: true,
             rotation_iterations: ROTATION_ITERATIONS,
             rotation_tolerance: ROTATION_TOLERANCE,
-            warped_iterations: WARPED_MAX_ITERATIONS,
+            krylov_iterations: KRYLOV_MAX_ITERATIONS,
             newton_iterations: NEWTON_MAX_ITERATIONS,
+            anchor: None,
             implicit: None,
         }
     }
@@ -330,7 +348,7 @@ impl FemDynamics {
     /// `(M (1 + dt alpha) + dt^2 K) v' = M v + dt f(x)`, `x += dt v'`. Exact backward Euler for the
     /// linear model; for the corotational one the step's equation with the force at its end is
     /// solved by Newton's method on the warped stiffness `K_w`, by conjugate gradients on the
-    /// rest factor ([`WarpedSolves`]). The first step (or a new `dt`) factorises; later steps
+    /// rest factor ([`NewtonSolves`]). The first step (or a new `dt`) factorises; later steps
     /// allocate nothing.
     pub fn step_prefactored(&mut self, dt: f64) -> Result<(), SparseError> {
         self.prefactored_step(dt, false)
@@ -342,7 +360,7 @@ impl FemDynamics {
     /// `x += dx`. Exact trapezoidal steps for the linear model; for the corotational one the
     /// step's equation with the force at its end (`f(x) + f(x + dx)` for `2 f(x)`) is solved by
     /// Newton's method on the warped stiffness `K_w`, by conjugate gradients on the rest factor
-    /// ([`WarpedSolves`]): the iterations bounded and counted.
+    /// ([`NewtonSolves`]): the iterations bounded and counted.
     pub fn step_newmark(&mut self, dt: f64) -> Result<(), SparseError> {
         self.prefactored_step(dt, true)
     }
@@ -358,32 +376,41 @@ impl FemDynamics {
                 let dofs = self.x.len();
                 let nodes = dofs / 3;
                 Implicit {
-                    system: self.prefactored_system(dt, trapezoidal)?,
+                    factor: Factor {
+                        system: self.prefactored_system(dt, trapezoidal)?,
+                        anchored: AnchoredSolve::new(dofs),
+                        held: None,
+                    },
                     rhs: vec![0.0; dofs],
                     key,
                     krylov: (self.formulation == Formulation::Corotational).then(|| Krylov {
-                        b: vec![0.0; dofs],
-                        r: vec![0.0; dofs],
-                        z: vec![0.0; dofs],
-                        p: vec![0.0; dofs],
-                        q: vec![0.0; dofs],
+                        newton: NewtonKrylov::new(dofs, self.krylov_iterations, self.newton_iterations),
                         x0: vec![0.0; dofs],
                         f0: vec![0.0; dofs],
-                        delta: vec![0.0; dofs],
                         zeros: std::array::from_fn(|_| vec![0.0; nodes]),
-                        solves: WarpedSolves::default(),
                     }),
                 }
             }
         };
+        let held = self.anchor.filter(|a| self.free.get(3 * a.node).is_some_and(|&f| f != 0.0)).map(|a| {
+            let (c_scale, k_scale) = implicit_scales(dt, trapezoidal);
+            (3 * a.node, a.diagonal(c_scale, k_scale))
+        });
+        work.factor.held = held;
+        if let Some((first, d)) = held
+            && let Err(e) = work.factor.anchored.prepare(&mut work.factor.system, [first, first + 1, first + 2], d)
+        {
+            self.implicit = Some(work);
+            return Err(e);
+        }
         self.compute_forces();
         let (v_scale, f_scale) = if trapezoidal { (dt, 0.5 * dt * dt) } else { (1.0, dt) };
         for i in 0..work.rhs.len() {
             work.rhs[i] = (v_scale * self.mass[i] * self.v[i] + f_scale * self.f[i]) * self.free[i];
         }
         let solved = match work.krylov.as_mut() {
-            Some(krylov) => self.corotational_solve(&mut work.system, &mut work.rhs, krylov, dt, trapezoidal),
-            None => work.system.solve_in_place(&mut work.rhs),
+            Some(krylov) => self.corotational_solve(&mut work.factor, &mut work.rhs, krylov, dt, trapezoidal),
+            None => work.factor.solve(&mut work.rhs),
         };
         let work = self.implicit.insert(work);
         solved?;
@@ -401,15 +428,12 @@ impl FemDynamics {
     }
 
     /// The corotational implicit step's unknown `y` (`dx` for the trapezoidal rule, `v'` for
-    /// backward Euler) from its linearised right-hand side `b` (given in `y`): the warped solve,
-    /// then Newton corrections on the step's nonlinear equation with the force at the step's end,
-    /// `a M y = v_s M v + w_n f(x) + w_e f(x + d(y))`, until its residual is
-    /// [`NEWTON_TOLERANCE`] of its terms' size (`|v_s M v| + (w_n + w_e) (|f| + |f_ext|)`),
-    /// [`FemDynamics::newton_iterations`] are spent, or a correction does not lower it (then the
-    /// iterate before it is kept). The positions are the step's start again on return.
+    /// backward Euler) from its linearised right-hand side `b` (given in `y`), by Newton's method
+    /// on the warped stiffness ([`crate::mechanics::newton_krylov`]). The positions are the
+    /// step's start again on return.
     fn corotational_solve(
         &mut self,
-        system: &mut SpdSystem,
+        factor: &mut Factor,
         y: &mut [f64],
         k: &mut Krylov,
         dt: f64,
@@ -429,122 +453,16 @@ impl FemDynamics {
             })
             .sum::<f64>()
             .sqrt();
-        k.solves.steps += 1;
-        self.warped_solve(system, y, k, a, k_scale)?;
-        if self.newton_iterations == 0 {
-            return Ok(());
-        }
         k.x0.copy_from_slice(&self.x);
         k.f0.copy_from_slice(&self.f);
-        let (mut newton, mut last) = (0, f64::INFINITY);
-        loop {
-            for i in 0..y.len() {
-                self.x[i] = k.x0[i] + d_scale * y[i] * self.free[i];
-            }
-            self.compute_forces();
-            for i in 0..y.len() {
-                k.r[i] = (v_scale * self.mass[i] * self.v[i] + w_n * k.f0[i] + w_e * self.f[i]
-                    - a * self.mass[i] * y[i])
-                    * self.free[i];
-            }
-            let residual = k.r.iter().map(|r| r * r).sum::<f64>().sqrt();
-            if residual <= NEWTON_TOLERANCE * scale {
-                break;
-            }
-            if residual.partial_cmp(&last) != Some(std::cmp::Ordering::Less) {
-                // Not converging (a tangent that leaves out the rotations' change, far from the
-                // solution): back to the last iterate.
-                for (y, d) in y.iter_mut().zip(&k.delta) {
-                    *y -= d;
-                }
-                newton -= 1;
-                k.solves.newton_unconverged += 1;
-                break;
-            }
-            if newton == self.newton_iterations {
-                k.solves.newton_unconverged += 1;
-                break;
-            }
-            last = residual;
-            k.delta.copy_from_slice(&k.r);
-            let mut delta = std::mem::take(&mut k.delta);
-            let solved = self.warped_solve(system, &mut delta, k, a, k_scale);
-            k.delta = delta;
-            if let Err(e) = solved {
-                self.x.copy_from_slice(&k.x0);
-                return Err(e);
-            }
-            for (y, d) in y.iter_mut().zip(&k.delta) {
-                *y += d;
-            }
-            newton += 1;
-        }
+        k.newton.krylov_max = self.krylov_iterations;
+        k.newton.newton_max = self.newton_iterations;
+        let Krylov { newton, x0, f0, zeros } = k;
+        let mut step =
+            CorotationalStep { fem: self, factor, x0, f0, zeros, scales: [a, k_scale, v_scale, w_n, w_e, d_scale] };
+        let solved = newton.solve(&mut step, y, scale);
         self.x.copy_from_slice(&k.x0);
-        k.solves.newton += newton;
-        k.solves.newton_most = k.solves.newton_most.max(newton);
-        Ok(())
-    }
-
-    /// Solves `(m_scale M + k_scale K_w) y = b`, `b` given in `y` and replaced by the solution
-    /// (see [`WarpedSolves`]): conjugate gradients preconditioned with the rest factor `system`,
-    /// from its solve, at most [`FemDynamics::warped_iterations`]. The fixed dofs stay 0.
-    /// Allocation-free.
-    fn warped_solve(
-        &mut self,
-        system: &mut SpdSystem,
-        y: &mut [f64],
-        k: &mut Krylov,
-        m_scale: f64,
-        k_scale: f64,
-    ) -> Result<(), SparseError> {
-        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
-        k.b.copy_from_slice(y);
-        system.solve_in_place(y)?;
-        // r = b - A y.
-        self.warped_system_product(y, m_scale, k_scale, &k.zeros, &mut k.q);
-        for ((r, b), q) in k.r.iter_mut().zip(&k.b).zip(&k.q) {
-            *r = b - q;
-        }
-        let stop = (WARPED_TOLERANCE * WARPED_TOLERANCE) * dot(&k.b, &k.b);
-        let mut iterations = 0;
-        let mut converged = dot(&k.r, &k.r) <= stop;
-        if !converged {
-            k.z.copy_from_slice(&k.r);
-            system.solve_in_place(&mut k.z)?;
-            k.p.copy_from_slice(&k.z);
-            let mut rz = dot(&k.r, &k.z);
-            while iterations < self.warped_iterations {
-                self.warped_system_product(&k.p, m_scale, k_scale, &k.zeros, &mut k.q);
-                let pq = dot(&k.p, &k.q);
-                if pq.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-                    break; // p = 0 to round-off: nothing left to reduce
-                }
-                let step = rz / pq;
-                for ((y, r), (p, q)) in y.iter_mut().zip(k.r.iter_mut()).zip(k.p.iter().zip(&k.q)) {
-                    *y += step * p;
-                    *r -= step * q;
-                }
-                iterations += 1;
-                converged = dot(&k.r, &k.r) <= stop;
-                if converged {
-                    break;
-                }
-                k.z.copy_from_slice(&k.r);
-                system.solve_in_place(&mut k.z)?;
-                let rz_next = dot(&k.r, &k.z);
-                let beta = rz_next / rz;
-                rz = rz_next;
-                for (p, z) in k.p.iter_mut().zip(&k.z) {
-                    *p = z + beta * *p;
-                }
-            }
-        }
-        let s = &mut k.solves;
-        s.solves += 1;
-        s.iterations += iterations;
-        s.most = s.most.max(iterations);
-        s.unconverged += usize::from(!converged);
-        Ok(())
+        solved
     }
 
     /// `out = (m_scale M p + k_scale K_w p)` on the free dofs (0 on the fixed ones), `K_w` the
@@ -576,8 +494,8 @@ impl FemDynamics {
 
     /// What the corotational implicit steps' solves have done since their factor was built
     /// (`None` before the first implicit step, or for the linear model).
-    pub fn warped_solves(&self) -> Option<WarpedSolves> {
-        self.implicit.as_ref()?.krylov.as_ref().map(|k| k.solves)
+    pub fn newton_solves(&self) -> Option<NewtonSolves> {
+        self.implicit.as_ref()?.krylov.as_ref().map(|k| k.newton.solves)
     }
 
     /// `M (1 + dt alpha) + dt^2 K` (backward Euler) or `M (1 + dt alpha / 2) + dt^2 / 4 K` (the
@@ -604,9 +522,9 @@ impl FemDynamics {
     /// Bytes held by the prefactored step's factor (0 before its first step).
     pub fn factor_memory_bytes(&self) -> usize {
         self.implicit.as_ref().map_or(0, |w| {
-            // Eight vectors of dofs and the zero rest positions (one more).
-            let krylov = w.krylov.as_ref().map_or(0, |k| 9 * k.b.len() * 8);
-            w.system.memory_bytes() + w.rhs.len() * 8 + krylov
+            // The solver's vectors, the step's start (two vectors) and the zero rest positions.
+            let krylov = w.krylov.as_ref().map_or(0, |k| k.newton.memory_bytes() + 3 * k.x0.len() * 8);
+            w.factor.system.memory_bytes() + w.factor.anchored.memory_bytes() + w.rhs.len() * 8 + krylov
         })
     }
 
@@ -660,6 +578,7 @@ mod tests {
     use super::*;
     use crate::mechanics::grid::Grid;
     use crate::mechanics::material::Material;
+    use crate::mechanics::newton_krylov::{KRYLOV_TOLERANCE, NEWTON_TOLERANCE};
 
     /// The rotation by `angle` about the unit axis `(1, 2, 2) / 3`, row-major.
     fn rotation(angle: f64) -> [[f64; 3]; 3] {
@@ -742,7 +661,7 @@ mod tests {
                 if trapezoidal { fem.step_newmark(dt) } else { fem.step_prefactored(dt) }.unwrap()
             };
             step(&mut fem);
-            let solves = fem.warped_solves().unwrap();
+            let solves = fem.newton_solves().unwrap();
             assert_eq!((solves.steps, solves.unconverged), (1, 0), "{solves:?}");
             assert!(solves.most >= 2, "{solves:?}");
             // The residual of the linearised system at the solution: the step's unknown is
@@ -762,12 +681,12 @@ mod tests {
             let norm = |v: &[f64]| v.iter().map(|v| v * v).sum::<f64>().sqrt();
             let residual: Vec<f64> = b.iter().zip(&ay).map(|(b, a)| b - a).collect();
             let relative = norm(&residual) / norm(&b);
-            assert!(relative < 2.0 * WARPED_TOLERANCE, "trapezoidal {trapezoidal}: residual {relative} of |b|");
+            assert!(relative < 2.0 * KRYLOV_TOLERANCE, "trapezoidal {trapezoidal}: residual {relative} of |b|");
             // The rest factor's solve alone leaves a residual many orders larger.
             let mut frozen = turned(&r);
             frozen.v.copy_from_slice(&v0);
             frozen.newton_iterations = 0;
-            frozen.warped_iterations = 0;
+            frozen.krylov_iterations = 0;
             step(&mut frozen);
             let y0: Vec<f64> =
                 if trapezoidal { frozen.x.iter().zip(&x0).map(|(x, x0)| x - x0).collect() } else { frozen.v.clone() };
@@ -828,7 +747,7 @@ mod tests {
                 }
                 let start = FemDynamics { x: fem.x.clone(), v: fem.v.clone(), ..turned(&r) };
                 if trapezoidal { fem.step_newmark(1e-3) } else { fem.step_prefactored(1e-3) }.unwrap();
-                let solves = fem.warped_solves().unwrap();
+                let solves = fem.newton_solves().unwrap();
                 assert_eq!((solves.steps, solves.unconverged, solves.newton_unconverged), (1, 0, 0), "{solves:?}");
                 assert!(newton == 0 || solves.newton >= 1, "{solves:?}");
                 residuals.push(nonlinear_residual(&start, &fem, 1e-3, trapezoidal));

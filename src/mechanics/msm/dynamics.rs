@@ -1,12 +1,21 @@
 //! Time integration of the mass-spring model: symplectic (semi-implicit) Euler, linearised
-//! backward (implicit) Euler with the tangent of every step, and the same with the rest tangent
-//! factorised once (prefactored). No step allocates once the state is built.
+//! backward (implicit) Euler with the tangent of every step, and backward Euler and Newmark's
+//! trapezoidal rule with the rest tangent factorised once (prefactored), solved by Newton's method
+//! on that factor ([`crate::mechanics::newton_krylov`]). A held node ([`Dynamics::anchor`]) is carried inside the
+//! implicit steps' solves ([`crate::mechanics::anchor`]). No step allocates once the state is built.
 
-use super::forces::{ForceScratch, TangentAssembler, accumulate_spring_forces, add_spring_forces, dispatch_avx2};
+use super::forces::{
+    ForceScratch, TangentAssembler, accumulate_spring_forces, add_spring_forces, dispatch_avx2, tangent_product,
+};
 use super::model::MsmModel;
 use super::reduction::DofMap;
+use crate::mechanics::anchor::{Anchor, AnchoredSolve};
 use crate::mechanics::cases::LoadCase;
+use crate::mechanics::newton_krylov::{
+    KRYLOV_MAX_ITERATIONS, NEWTON_MAX_ITERATIONS, NewtonKrylov, NewtonSolves, StepEquation,
+};
 use crate::mechanics::sparse::SparseError;
+use crate::mechanics::sparse::SpdSystem;
 
 /// The state of a running mass-spring model and the buffers its steps work in.
 #[derive(Debug)]
@@ -19,6 +28,10 @@ pub struct Dynamics {
     pub f_ext: [Vec<f64>; 3],
     /// 1.0 for a free node, 0.0 for a fixed one.
     pub free: Vec<f64>,
+    /// A node held by a spring and damper, carried inside the implicit steps' solves (its pull at
+    /// the step's start is the caller's, in `f_ext`); the symplectic step leaves it to its
+    /// caller. Ignored on a fixed node.
+    pub anchor: Option<Anchor>,
     f: [Vec<f64>; 3],
     scratch: ForceScratch,
     implicit: Option<ImplicitWork>,
@@ -27,6 +40,11 @@ pub struct Dynamics {
     family_offsets: Vec<usize>,
     /// `1 / m` of each node.
     inv_mass: Vec<f64>,
+}
+
+/// The anchor, where its node is free.
+fn held(anchor: Option<Anchor>, free: &[f64]) -> Option<Anchor> {
+    anchor.filter(|a| free.get(a.node).is_some_and(|&f| f != 0.0))
 }
 
 #[derive(Debug)]
@@ -53,6 +71,123 @@ struct PrefactoredWork {
     /// `m_p + dt c_p` of each node, then folded onto the unknowns.
     node_diag: Vec<f64>,
     mass: Vec<f64>,
+    /// The factor's correction for the held node.
+    anchored: AnchoredSolve,
+    /// Newton's corrections by conjugate gradients on the factor.
+    newton: NewtonKrylov,
+    /// The step's start positions and forces, and a vector and a product on the nodes.
+    x0: [Vec<f64>; 3],
+    f0: [Vec<f64>; 3],
+    p_nodes: [Vec<f64>; 3],
+    out_nodes: [Vec<f64>; 3],
+}
+
+impl PrefactoredWork {
+    /// The rest tangent's pattern for the free nodes `free`, and buffers (factorised at the
+    /// first step).
+    fn new(model: &MsmModel, free: &[f64], trapezoidal: bool) -> Result<Self, SparseError> {
+        let fixed: Vec<bool> = free.iter().map(|&f| f == 0.0).collect();
+        let tangent = TangentAssembler::at_rest(model, DofMap::free(&fixed))?;
+        let n = tangent.system.n();
+        let g = model.grid;
+        let nodes = || std::array::from_fn(|_| vec![0.0; g.num_nodes()]);
+        Ok(Self {
+            rhs: vec![0.0; n],
+            rest: std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect()),
+            dt: f64::NAN,
+            trapezoidal,
+            node_diag: vec![0.0; g.num_nodes()],
+            mass: vec![0.0; n],
+            anchored: AnchoredSolve::new(n),
+            newton: NewtonKrylov::new(n, KRYLOV_MAX_ITERATIONS, NEWTON_MAX_ITERATIONS),
+            x0: nodes(),
+            f0: nodes(),
+            p_nodes: nodes(),
+            out_nodes: nodes(),
+            tangent,
+        })
+    }
+}
+
+/// The lattice's implicit step's equation for [`NewtonKrylov`], on the reduced unknowns: the
+/// springs' tangent at the iterate (geometric parts clamped at zero), the rest factor as the
+/// preconditioner, both with the held node's anchor.
+struct LatticeStep<'a> {
+    model: &'a MsmModel,
+    dofs: &'a DofMap,
+    system: &'a mut SpdSystem,
+    anchored: &'a AnchoredSolve,
+    /// The held node's unknowns and what the anchor adds to their diagonal.
+    held: Option<([usize; 3], f64)>,
+    /// `m + c_s c` of each unknown.
+    mass: &'a [f64],
+    x0: &'a [Vec<f64>; 3],
+    f0: &'a [Vec<f64>; 3],
+    v: &'a [Vec<f64>; 3],
+    f_ext: &'a [Vec<f64>; 3],
+    /// The iterate's positions and forces.
+    x: &'a mut [Vec<f64>; 3],
+    f: &'a mut [Vec<f64>; 3],
+    p_nodes: &'a mut [Vec<f64>; 3],
+    out_nodes: &'a mut [Vec<f64>; 3],
+    scratch: &'a mut ForceScratch,
+    /// `k` (stiffness), `v_s`, `w_n`, `w_e` and the position's scale `d` of `y`.
+    scales: [f64; 5],
+}
+
+impl StepEquation for LatticeStep<'_> {
+    fn residual(&mut self, y: &[f64], r: &mut [f64]) {
+        let [_, v_scale, w_n, w_e, d_scale] = self.scales;
+        for (dof, &(u, _)) in self.dofs.map.iter().enumerate() {
+            if u != u32::MAX {
+                let (p, c) = (dof / 3, dof % 3);
+                self.x[c][p] = self.x0[c][p] + d_scale * y[u as usize];
+            }
+        }
+        for (f, f_ext) in self.f.iter_mut().zip(self.f_ext) {
+            f.copy_from_slice(f_ext);
+        }
+        add_spring_forces(self.model, self.x, self.f, self.scratch);
+        for (dof, &(u, _)) in self.dofs.map.iter().enumerate() {
+            if u != u32::MAX {
+                let (p, c, u) = (dof / 3, dof % 3, u as usize);
+                let m = self.model.masses[p];
+                r[u] = v_scale * m * self.v[c][p] + w_n * self.f0[c][p] + w_e * self.f[c][p] - self.mass[u] * y[u];
+            }
+        }
+        if let Some((unknowns, d)) = self.held {
+            for j in unknowns {
+                r[j] -= d * y[j];
+            }
+        }
+    }
+
+    fn product(&mut self, p: &[f64], out: &mut [f64]) {
+        let k_scale = self.scales[0];
+        for (dof, &(u, _)) in self.dofs.map.iter().enumerate() {
+            self.p_nodes[dof % 3][dof / 3] = if u == u32::MAX { 0.0 } else { p[u as usize] };
+        }
+        tangent_product(self.model, self.x, self.p_nodes, self.out_nodes, self.scratch);
+        for (dof, &(u, _)) in self.dofs.map.iter().enumerate() {
+            if u != u32::MAX {
+                let u = u as usize;
+                out[u] = k_scale * self.out_nodes[dof % 3][dof / 3] + self.mass[u] * p[u];
+            }
+        }
+        if let Some((unknowns, d)) = self.held {
+            for j in unknowns {
+                out[j] += d * p[j];
+            }
+        }
+    }
+
+    fn precondition(&mut self, z: &mut [f64]) -> Result<(), SparseError> {
+        self.system.solve_in_place(z)?;
+        if self.held.is_some() {
+            self.anchored.correct(z);
+        }
+        Ok(())
+    }
 }
 
 impl Dynamics {
@@ -67,6 +202,7 @@ impl Dynamics {
             v: zeros(),
             f_ext: zeros(),
             free: vec![1.0; nn],
+            anchor: None,
             f: zeros(),
             scratch: ForceScratch::new(model),
             implicit: None,
@@ -156,6 +292,12 @@ impl Dynamics {
             *o = m + dt * c;
         }
         work.tangent.dofs.fold_masses(&work.node_diag, &mut work.mass);
+        let held = held(self.anchor, &self.free);
+        if let Some(a) = held {
+            for c in 0..3 {
+                work.mass[work.tangent.dofs.map[3 * a.node + c].0 as usize] += a.diagonal(dt, dt * dt);
+            }
+        }
         work.tangent.system.add_diagonal_scaled(1.0, &work.mass);
         work.tangent.system.factor()?;
         for (p, &free) in self.free.iter().enumerate() {
@@ -165,6 +307,14 @@ impl Dynamics {
                     let d = model.damping[p];
                     work.rhs[r] = dt * (self.f[c][p] - d * self.v[c][p] - dt * work.kv[c][p]);
                 }
+            }
+        }
+        // The anchor's damping and stiffness on the node's velocity, as the tissue's above.
+        if let Some(a) = held {
+            for c in 0..3 {
+                let v = self.v[c][a.node];
+                work.rhs[work.tangent.dofs.map[3 * a.node + c].0 as usize] -=
+                    dt * (a.damping * v + dt * a.stiffness * v);
             }
         }
         work.tangent.system.solve_in_place(&mut work.rhs)?;
@@ -179,41 +329,49 @@ impl Dynamics {
         Ok(())
     }
 
-    /// One linearised backward Euler step with the rest tangent `K_0`, factorised once:
-    /// `(M + dt C + dt^2 K_0) v' = M v + dt f(x)`, then `x += dt v'`. The spring forces `f(x)` are
-    /// the full nonlinear ones; only the Jacobian is frozen at rest, so the step is as accurate
-    /// as [`Dynamics::step_implicit`] for small strains and rotations and costs one force pass
-    /// and one pair of triangular solves. The factor is rebuilt when `dt`, the parameters or
-    /// the fixed nodes change; a step that reuses it allocates nothing.
+    /// One backward Euler step with the rest tangent `K_0` factorised once:
+    /// `(M + dt C + dt^2 K_0) v' = M v + dt f(x)` is its first iterate, then Newton's method
+    /// solves the step's equation with the force at its end, `(M + dt C) v' = M v + dt f(x + dt
+    /// v')`, each linear solve by conjugate gradients on the springs' tangent preconditioned with
+    /// that factor ([`crate::mechanics::newton_krylov`]; [`Dynamics::newton_solves`] counts
+    /// them), then `x += dt v'`. The factor is rebuilt when `dt`, the parameters or the fixed
+    /// nodes change; a step that reuses it allocates nothing.
     pub fn step_prefactored(&mut self, model: &MsmModel, dt: f64) -> Result<(), SparseError> {
         self.prefactored_step(model, dt, false)
     }
 
     /// One step of Newmark's average acceleration (the trapezoidal rule: no numerical damping,
-    /// second order) linearised with the rest tangent `K_0`, factorised once:
-    /// `(M + dt/2 C + dt^2/4 K_0) dx = dt M v + dt^2/2 f(x)`, then `v' = 2 dx / dt - v` and
-    /// `x += dx`. Exact trapezoidal steps for a linear model; one force pass and one solve.
+    /// second order) with the rest tangent `K_0` factorised once: `(M + dt/2 C + dt^2/4 K_0) dx =
+    /// dt M v + dt^2/2 f(x)` is its first iterate, then Newton's method solves the step's equation
+    /// with `(f(x) + f(x + dx)) / 2` for `f(x)` as [`Dynamics::step_prefactored`] does; then
+    /// `v' = 2 dx / dt - v` and `x += dx`. Linearised at rest alone it blew up under a 2 cm
+    /// corner drag of the hex lattice at 8^3 and 1 ms.
     pub fn step_newmark(&mut self, model: &MsmModel, dt: f64) -> Result<(), SparseError> {
         self.prefactored_step(model, dt, true)
     }
 
     fn prefactored_step(&mut self, model: &MsmModel, dt: f64, trapezoidal: bool) -> Result<(), SparseError> {
-        // Moved out while the forces are computed, and back in (moves only: no allocation).
-        let work = match self.prefactored.take() {
+        // Moved out while the step runs, and back in (moves only: no allocation).
+        let mut work = match self.prefactored.take() {
             Some(work) => work,
-            None => {
-                let fixed: Vec<bool> = self.free.iter().map(|&f| f == 0.0).collect();
-                let tangent = TangentAssembler::at_rest(model, DofMap::free(&fixed))?;
-                let rhs = vec![0.0; tangent.system.n()];
-                let g = model.grid;
-                let rest = std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect());
-                let mass = vec![0.0; tangent.system.n()];
-                let node_diag = vec![0.0; g.num_nodes()];
-                PrefactoredWork { tangent, rhs, rest, dt: f64::NAN, trapezoidal, node_diag, mass }
-            }
+            None => PrefactoredWork::new(model, &self.free, trapezoidal)?,
         };
+        let stepped = self.prefactored_solve(model, &mut work, dt, trapezoidal);
+        self.prefactored = Some(work);
+        stepped
+    }
+
+    /// The prefactored step on `work`: the rest factor (rebuilt for a new `dt` or scheme), the
+    /// linearised right-hand side, then Newton's method on the springs' tangent
+    /// ([`crate::mechanics::newton_krylov`]).
+    fn prefactored_solve(
+        &mut self,
+        model: &MsmModel,
+        work: &mut PrefactoredWork,
+        dt: f64,
+        trapezoidal: bool,
+    ) -> Result<(), SparseError> {
         self.forces(model);
-        let work = self.prefactored.insert(work);
         // Backward Euler solves for v' with (dt, dt^2); the trapezoidal rule for dx with
         // (dt/2, dt^2/4) and its right-hand side scaled by dt.
         let (c_scale, k_scale) = if trapezoidal { (0.5 * dt, 0.25 * dt * dt) } else { (dt, dt * dt) };
@@ -224,20 +382,60 @@ impl Dynamics {
             }
             work.tangent.dofs.fold_masses(&work.node_diag, &mut work.mass);
             work.tangent.system.add_diagonal_scaled(1.0, &work.mass);
+            work.anchored.invalidate();
             work.tangent.system.factor()?;
             (work.dt, work.trapezoidal) = (dt, trapezoidal);
         }
-        let (v_scale, f_scale) = if trapezoidal { (dt, 0.5 * dt * dt) } else { (1.0, dt) };
+        let held = match held(self.anchor, &self.free) {
+            Some(a) => {
+                let unknowns = std::array::from_fn(|c| work.tangent.dofs.map[3 * a.node + c].0 as usize);
+                let d = a.diagonal(c_scale, k_scale);
+                work.anchored.prepare(&mut work.tangent.system, unknowns, d)?;
+                Some((unknowns, d))
+            }
+            None => None,
+        };
+        let (v_scale, w_n, w_e) = if trapezoidal { (dt, 0.25 * dt * dt, 0.25 * dt * dt) } else { (1.0, 0.0, dt) };
+        let mut scale = 0.0;
         for (p, &free) in self.free.iter().enumerate() {
             if free != 0.0 {
                 let m = model.masses[p];
                 for c in 0..3 {
                     work.rhs[work.tangent.dofs.map[3 * p + c].0 as usize] =
-                        v_scale * m * self.v[c][p] + f_scale * self.f[c][p];
+                        v_scale * m * self.v[c][p] + (w_n + w_e) * self.f[c][p];
+                    let t = v_scale * (m * self.v[c][p]).abs()
+                        + (w_n + w_e) * (self.f[c][p].abs() + self.f_ext[c][p].abs());
+                    scale += t * t;
                 }
             }
         }
-        work.tangent.system.solve_in_place(&mut work.rhs)?;
+        for c in 0..3 {
+            work.x0[c].copy_from_slice(&self.x[c]);
+            work.f0[c].copy_from_slice(&self.f[c]);
+        }
+        let mut step = LatticeStep {
+            model,
+            dofs: &work.tangent.dofs,
+            system: &mut work.tangent.system,
+            anchored: &work.anchored,
+            held,
+            mass: &work.mass,
+            x0: &work.x0,
+            f0: &work.f0,
+            v: &self.v,
+            f_ext: &self.f_ext,
+            x: &mut self.x,
+            f: &mut self.f,
+            p_nodes: &mut work.p_nodes,
+            out_nodes: &mut work.out_nodes,
+            scratch: &mut self.scratch,
+            scales: [k_scale, v_scale, w_n, w_e, if trapezoidal { 1.0 } else { dt }],
+        };
+        let solved = work.newton.solve(&mut step, &mut work.rhs, scale.sqrt());
+        for c in 0..3 {
+            self.x[c].copy_from_slice(&work.x0[c]);
+        }
+        solved?;
         for (p, &free) in self.free.iter().enumerate() {
             if free != 0.0 {
                 for c in 0..3 {
@@ -255,11 +453,20 @@ impl Dynamics {
         Ok(())
     }
 
+    /// What the prefactored steps' solves have done since their factor was built (`None` before
+    /// the first).
+    pub fn newton_solves(&self) -> Option<NewtonSolves> {
+        self.prefactored.as_ref().map(|w| w.newton.solves)
+    }
+
     /// Bytes held by the prefactored step's factor and buffers (0 before its first step).
     pub fn prefactored_memory_bytes(&self) -> usize {
-        self.prefactored
-            .as_ref()
-            .map_or(0, |w| w.tangent.system.memory_bytes() + (w.rhs.len() + 3 * w.rest[0].len()) * 8)
+        self.prefactored.as_ref().map_or(0, |w| {
+            w.tangent.system.memory_bytes()
+                + w.anchored.memory_bytes()
+                + w.newton.memory_bytes()
+                + (w.rhs.len() + 15 * w.rest[0].len()) * 8
+        })
     }
 
     /// Kinetic energy, joules.

@@ -192,6 +192,51 @@ pub fn add_spring_forces(model: &MsmModel, x: &[Vec<f64>; 3], f: &mut [Vec<f64>;
     );
 }
 
+/// `out = K_t(x) p` on node arrays: the springs' tangent at positions `x`, each geometric part
+/// `(1 - l0 / l)` clamped at zero (the assembled tangent of [`TangentAssembler::assemble`] with
+/// `clamp_geometric`, without building it), family by family through `scratch` as the forces are.
+/// For the implicit steps' conjugate gradients ([`crate::mechanics::newton_krylov`]).
+/// Allocation-free.
+pub fn tangent_product(
+    model: &MsmModel,
+    x: &[Vec<f64>; 3],
+    p: &[Vec<f64>; 3],
+    out: &mut [Vec<f64>; 3],
+    scratch: &mut ForceScratch,
+) {
+    let nn = out[0].len();
+    for o in out.iter_mut() {
+        o.fill(0.0);
+    }
+    for fam in &model.families {
+        let len = fam.stiffness.len();
+        let (s, l0) = (fam.offset, fam.rest_length);
+        debug_assert_eq!(fam.lo, 0);
+        for t in &mut scratch.t {
+            t[..s].fill(0.0);
+            t[s + len..s + nn].fill(0.0);
+        }
+        for (q, &k) in fam.stiffness.iter().enumerate() {
+            let d: [f64; 3] = std::array::from_fn(|c| x[c][q + s] - x[c][q]);
+            let l = DVec3::from(d).length().max(f64::MIN_POSITIVE);
+            let n = d.map(|v| v / l);
+            let g = (1.0 - l0 / l).max(0.0);
+            let dp: [f64; 3] = std::array::from_fn(|c| p[c][q + s] - p[c][q]);
+            let along = n[0] * dp[0] + n[1] * dp[1] + n[2] * dp[2];
+            for (c, t) in scratch.t.iter_mut().enumerate() {
+                t[s + q] = k * (g * dp[c] + (1.0 - g) * n[c] * along);
+            }
+        }
+        // `t` is minus the product's share on each pair's first node, as a force would be.
+        for (oc, t) in out.iter_mut().zip(&scratch.t) {
+            let (ahead, behind) = (&t[s..s + nn], &t[..nn]);
+            for ((o, a), b) in oc.iter_mut().zip(ahead).zip(behind) {
+                *o -= a - b;
+            }
+        }
+    }
+}
+
 /// Tangent-stiffness assembly of a model into a sparse SPD system over reduced unknowns
 /// (see [`DofMap`]): `P^T K_t P`.
 #[derive(Debug)]
@@ -395,6 +440,47 @@ mod tests {
         assert!(scale > 0.1, "{scale}");
         for (e, f) in exact.iter().flatten().zip(fast.iter().flatten()) {
             assert!((e - f).abs() <= 1e-12 * scale, "{e} vs {f}");
+        }
+    }
+
+    /// The matrix-free tangent product is the assembled tangent's, with every spring stretched,
+    /// compressed and turned (hex lattice at 5^3, no node held).
+    #[test]
+    fn the_tangent_product_is_the_assembled_tangents() {
+        let grid = Grid::new(5).expect("grid");
+        let params = MsmParams {
+            k1: 40.0,
+            k2: 50.0,
+            k3: 60.0,
+            d: 0.0,
+            c12: Some(10.0),
+            c13: Some(11.0),
+            c23: Some(12.0),
+            b: Some(5.0),
+        };
+        let model = MsmModel::new(grid, params, 1000.0).expect("model");
+        let nn = grid.num_nodes();
+        let x: [Vec<f64>; 3] = std::array::from_fn(|c| {
+            (0..nn).map(|p| 1.1 * grid.position(p)[c] + 4e-3 * ((p * (c + 3)) % 7) as f64 - 3e-3).collect()
+        });
+        let p: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|q| ((q * 3 + c) as f64 * 0.37).sin()).collect());
+        let mut out: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
+        tangent_product(&model, &x, &p, &mut out, &mut ForceScratch::new(&model));
+        let dofs = DofMap::free(&vec![false; nn]);
+        let mut tangent = TangentAssembler::new(&model, dofs).expect("pattern");
+        tangent.assemble(&model, &x, 1.0, 0.0, true, None);
+        let flat: Vec<f64> = (0..3 * nn).map(|i| p[i % 3][i / 3]).collect();
+        let mut want = vec![0.0; 3 * nn];
+        tangent.system.mul(&flat, &mut want);
+        let scale = want.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        assert!(scale > 1.0, "{scale}");
+        for i in 0..3 * nn {
+            assert!(
+                (out[i % 3][i / 3] - want[i]).abs() <= 1e-12 * scale,
+                "dof {i}: {} vs {}",
+                out[i % 3][i / 3],
+                want[i]
+            );
         }
     }
 }
