@@ -66,7 +66,8 @@ fn every_input_file_is_bounded() {
 
 /// Class: the tools do not break the step choice. The README's script at the viewer's FEM step
 /// (1 ms) runs for every model under the automatic choice, and with prefactored Euler asked for
-/// by name (the drag is a split step, stable at any step; a refusal would have to say why). A
+/// by name (the drag is a split step after symplectic Euler and inside the implicit solves,
+/// stable at any step; a refusal would have to say why). A
 /// drag of an unclamped cube carries it along without a blow-up.
 #[test]
 fn every_allowed_script_runs_or_is_refused_with_the_true_reason() {
@@ -80,7 +81,7 @@ fn every_allowed_script_runs_or_is_refused_with_the_true_reason() {
         assert!(o.status.success(), "{model} at 1 ms: {}", stderr(&o));
         let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).expect("out")).expect("json");
         assert_eq!(v["blow_ups"].as_array().map(Vec::len), Some(0), "{model}: {v}");
-        // Asked for by name: runs without a blow-up (before the drag became a split step, its
+        // Asked for by name: runs without a blow-up (when the drag was an explicit force, its
         // spring refused 1 ms on the lighter nodes).
         let named = text.replace("\"clamp\"", "\"integrator\": \"prefactored\", \"clamp\"");
         let p = write(dir.path(), "n.json", &named);

@@ -152,6 +152,13 @@ impl Tissue for GpuTissue {
     fn carries_contact_loads(&self) -> bool {
         self.inner.carries_contact_loads()
     }
+    fn newton_solves(&self) -> Option<crate::mechanics::newton_krylov::NewtonSolves> {
+        self.inner.newton_solves()
+    }
+    fn set_anchor(&mut self, anchor: Option<crate::mechanics::anchor::Anchor>) -> bool {
+        // The implicit steps run on the CPU's model, which holds the drag in its solve.
+        self.inner.set_anchor(anchor)
+    }
     fn computed_on(&self) -> Option<String> {
         Some(format!("symplectic steps on the GPU: {}", self.adapter()))
     }

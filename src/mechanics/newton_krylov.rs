@@ -11,7 +11,8 @@
 //! not vanish at rest, where `b` does) or [`NewtonKrylov::newton_max`] corrections are spent; a
 //! correction that does not lower the residual is undone. Each linear solve runs conjugate
 //! gradients preconditioned with the rest factor `a M + k K_0` (factorised once per step size),
-//! from that factor's solve, until its residual is [`KRYLOV_TOLERANCE`] of `|b|`. For the
+//! from that factor's solve, until its residual is [`KRYLOV_TOLERANCE`] of `|b|` or of the
+//! equation's terms' size, whichever is larger. For the
 //! corotational FEM the tangent is the stiffness warped by the elements' rotations, `K_w = sum_e
 //! R_e K_e R_e^T` (Mueller et al. 2002: the change of the rotations left out); for a lattice, the
 //! springs' tangent with each geometric part clamped at zero. Either is positive semi-definite
@@ -21,7 +22,8 @@
 
 use super::sparse::SparseError;
 
-/// The relative residual `|b - A y| / |b|` where a linear solve stops.
+/// The residual `|b - A y|`, relative to `|b|` or the equation's terms' size (the larger), where a
+/// linear solve stops.
 pub const KRYLOV_TOLERANCE: f64 = 1e-6;
 /// The most conjugate-gradient iterations of one linear solve ([`NewtonKrylov::krylov_max`]'s
 /// default).
@@ -49,7 +51,7 @@ pub trait StepEquation {
 }
 
 /// What the implicit steps' solves have done since their factor was built (a new step size,
-/// damping, parameters or load case builds it anew).
+/// scheme, damping, parameters or load case builds it anew, and the counts start again).
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub struct NewtonSolves {
     /// Steps taken.

@@ -1,6 +1,6 @@
 //! The physics' own thread pool: the per-element and per-node loops of a step split over the
 //! machine's cores. Its own pool (not rayon's global one, which a background calibration fills),
-//! so a step never waits behind other work's tasks.
+//! so a step never waits behind a calibration's tasks (see [`on_pool`] for what it may take).
 
 use std::sync::OnceLock;
 
@@ -26,7 +26,10 @@ pub fn pool() -> Option<&'static rayon::ThreadPool> {
 /// loop of steps run this way splits each step over the pool from inside it, where a split goes
 /// on the thread's own task queue and allocates nothing. A call into the pool from outside
 /// queues each split in rayon's shared injector instead, which allocates a block every 63
-/// calls. The viewer's physics loop and `bench`'s timed ticks run here.
+/// calls. The viewer's physics loop and `bench`'s timed ticks run here. The loop's thread is
+/// then one of the pool's: while it waits for a split's other half it may take another queued
+/// task of the pool's (a background FEM answer's stencil product at 16^3 and above), which it
+/// finishes first. On one core there is no pool: `f` runs here.
 pub fn on_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     match pool() {
         Some(pool) => pool.install(f),

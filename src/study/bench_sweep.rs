@@ -49,8 +49,9 @@ pub struct SweepTick {
     /// Why there is no time, if there is none.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
-    /// The corotational FEM's implicit rows: the conjugate-gradient iterations of its warped
-    /// solves over the whole run (press, hold and timed ticks).
+    /// The implicit rows of the lattices and the corotational FEM: their Newton corrections and
+    /// conjugate-gradient iterations over the whole run (press, hold and timed ticks;
+    /// [`crate::mechanics::newton_krylov`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub newton_solves: Option<crate::mechanics::newton_krylov::NewtonSolves>,
 }
@@ -283,7 +284,7 @@ impl Sweep {
             let auto = if t.automatic { " [automatic]" } else { "" };
             let cg = t.newton_solves.map_or(String::new(), |w| {
                 format!(
-                    " (warped CG: {:.2} a step, at most {}, {} unconverged)",
+                    " (Newton's CG: {:.2} a step, at most {}, {} unconverged)",
                     w.iterations as f64 / w.steps.max(1) as f64,
                     w.most,
                     w.unconverged

@@ -392,10 +392,15 @@ impl FemDynamics {
                 }
             }
         };
-        let held = self.anchor.filter(|a| self.free.get(3 * a.node).is_some_and(|&f| f != 0.0)).map(|a| {
-            let (c_scale, k_scale) = implicit_scales(dt, trapezoidal);
-            (3 * a.node, a.diagonal(c_scale, k_scale))
-        });
+        // Held where any of the node's dofs is free (a fixed dof's row is decoupled, its
+        // unknown stays 0 with the anchor's diagonal too).
+        let held = self
+            .anchor
+            .filter(|a| self.free.get(3 * a.node..3 * a.node + 3).is_some_and(|f| f.iter().any(|&f| f != 0.0)))
+            .map(|a| {
+                let (c_scale, k_scale) = implicit_scales(dt, trapezoidal);
+                (3 * a.node, a.diagonal(c_scale, k_scale))
+            });
         work.factor.held = held;
         if let Some((first, d)) = held
             && let Err(e) = work.factor.anchored.prepare(&mut work.factor.system, [first, first + 1, first + 2], d)

@@ -1,8 +1,9 @@
 //! Time integration of the mass-spring model: symplectic (semi-implicit) Euler, linearised
 //! backward (implicit) Euler with the tangent of every step, and backward Euler and Newmark's
-//! trapezoidal rule with the rest tangent factorised once (prefactored), solved by Newton's method
-//! on that factor ([`crate::mechanics::newton_krylov`]). A held node ([`Dynamics::anchor`]) is carried inside the
-//! implicit steps' solves ([`crate::mechanics::anchor`]). No step allocates once the state is built.
+//! trapezoidal rule with the rest tangent factorised once (prefactored), solved by Newton's
+//! method on that factor ([`crate::mechanics::newton_krylov`]). A held node
+//! ([`Dynamics::anchor`]) is carried inside the implicit steps' solves
+//! ([`crate::mechanics::anchor`]). No step allocates once the state is built.
 
 use super::forces::{
     ForceScratch, TangentAssembler, accumulate_spring_forces, add_spring_forces, dispatch_avx2, tangent_product,
@@ -383,8 +384,10 @@ impl Dynamics {
             work.tangent.dofs.fold_masses(&work.node_diag, &mut work.mass);
             work.tangent.system.add_diagonal_scaled(1.0, &work.mass);
             work.anchored.invalidate();
+            work.dt = f64::NAN; // until the factor is built: a failed one is tried again
             work.tangent.system.factor()?;
             (work.dt, work.trapezoidal) = (dt, trapezoidal);
+            work.newton.solves = NewtonSolves::default();
         }
         let held = match held(self.anchor, &self.free) {
             Some(a) => {
