@@ -405,12 +405,8 @@ mod tests {
     use crate::mechanics::grid::Grid;
     use crate::mechanics::msm::model::MsmParams;
 
-    /// The explicit step's pair loop (reciprocal square root and Newton steps where AVX2 runs)
-    /// gives the exact loop's forces within 1e-12 of the largest, on a hex lattice at 9^3 (its
-    /// last pairs one by one) with every node moved off its rest position.
-    #[test]
-    fn the_fast_pair_loop_is_the_exact_one() {
-        let grid = Grid::new(9).expect("grid");
+    /// A hex lattice with every family's stiffness distinct.
+    fn hex_model(grid: Grid) -> MsmModel {
         let params = MsmParams {
             k1: 40.0,
             k2: 50.0,
@@ -421,7 +417,16 @@ mod tests {
             c23: Some(12.0),
             b: Some(5.0),
         };
-        let model = MsmModel::new(grid, params, 1000.0).expect("model");
+        MsmModel::new(grid, params, 1000.0).expect("model")
+    }
+
+    /// The explicit step's pair loop (reciprocal square root and Newton steps where AVX2 runs)
+    /// gives the exact loop's forces within 1e-12 of the largest, on a hex lattice at 9^3 (its
+    /// last pairs one by one) with every node moved off its rest position.
+    #[test]
+    fn the_fast_pair_loop_is_the_exact_one() {
+        let grid = Grid::new(9).expect("grid");
+        let model = hex_model(grid);
         let nn = grid.num_nodes();
         let x: [Vec<f64>; 3] =
             std::array::from_fn(|c| (0..nn).map(|p| grid.position(p)[c] + 1e-3 * ((p * (c + 3)) % 7) as f64).collect());
@@ -448,17 +453,7 @@ mod tests {
     #[test]
     fn the_tangent_product_is_the_assembled_tangents() {
         let grid = Grid::new(5).expect("grid");
-        let params = MsmParams {
-            k1: 40.0,
-            k2: 50.0,
-            k3: 60.0,
-            d: 0.0,
-            c12: Some(10.0),
-            c13: Some(11.0),
-            c23: Some(12.0),
-            b: Some(5.0),
-        };
-        let model = MsmModel::new(grid, params, 1000.0).expect("model");
+        let model = hex_model(grid);
         let nn = grid.num_nodes();
         let x: [Vec<f64>; 3] = std::array::from_fn(|c| {
             (0..nn).map(|p| 1.1 * grid.position(p)[c] + 4e-3 * ((p * (c + 3)) % 7) as f64 - 3e-3).collect()
