@@ -37,6 +37,25 @@ impl Anchor {
     }
 }
 
+/// An anchor in one step's system: its node's three unknowns and what it adds to their diagonal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Held {
+    /// The node's unknowns.
+    pub unknowns: [usize; 3],
+    /// `c_s c + k_s k` ([`Anchor::diagonal`]).
+    pub diagonal: f64,
+}
+
+impl Held {
+    /// Adds `sign d y` on the held unknowns to `out` (the anchor's share of a product, or, with
+    /// `sign = -1`, of a residual).
+    pub fn add_to(&self, y: &[f64], sign: f64, out: &mut [f64]) {
+        for j in self.unknowns {
+            out[j] += sign * self.diagonal * y[j];
+        }
+    }
+}
+
 /// The correction of a factorised system `A` to `A + d U U^T` on three unknowns (see the
 /// module's documentation).
 #[derive(Debug)]
@@ -62,7 +81,8 @@ impl AnchoredSolve {
 
     /// Makes the correction ready for `d` on `unknowns` of the factorised `system`: three solves
     /// when they or the factor changed since the last call, nothing otherwise. Allocation-free.
-    pub fn prepare(&mut self, system: &mut SpdSystem, unknowns: [usize; 3], d: f64) -> Result<(), SparseError> {
+    pub fn prepare(&mut self, system: &mut SpdSystem, held: Held) -> Result<(), SparseError> {
+        let Held { unknowns, diagonal: d } = held;
         if self.key == Some((unknowns, d)) {
             return Ok(());
         }
@@ -148,7 +168,7 @@ mod tests {
         let (mut system, dense) = chain(n);
         let mut anchored = AnchoredSolve::new(n);
         for (unknowns, d) in [([3, 4, 5], 7.5), ([0, 6, 11], 1e6), ([9, 10, 11], 1e-3)] {
-            anchored.prepare(&mut system, unknowns, d).expect("prepare");
+            anchored.prepare(&mut system, Held { unknowns, diagonal: d }).expect("prepare");
             let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin() + 0.3).collect();
             let mut y = b.clone();
             system.solve_in_place(&mut y).expect("solve");
@@ -159,7 +179,8 @@ mod tests {
                 assert!((ay - b[i]).abs() < 1e-9 * (1.0 + d), "{unknowns:?}, d = {d}, row {i}: {ay} vs {}", b[i]);
             }
         }
-        assert!(anchored.prepare(&mut system, [0, 1, 2], -1.0).is_err(), "a negative diagonal is refused");
+        let negative = Held { unknowns: [0, 1, 2], diagonal: -1.0 };
+        assert!(anchored.prepare(&mut system, negative).is_err(), "a negative diagonal is refused");
         let mut y = vec![1.0; n];
         anchored.correct(&mut y);
         assert_eq!(y, vec![1.0; n], "a refused correction corrects nothing");

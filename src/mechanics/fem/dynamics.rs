@@ -16,7 +16,7 @@
 
 use super::FemModel;
 use super::corotation::{Corotation, IDENTITY, ParityBlocks};
-use crate::mechanics::anchor::{Anchor, AnchoredSolve};
+use crate::mechanics::anchor::{Anchor, AnchoredSolve, Held};
 use crate::mechanics::newton_krylov::{
     KRYLOV_MAX_ITERATIONS, NEWTON_MAX_ITERATIONS, NewtonKrylov, NewtonSolves, StepEquation,
 };
@@ -120,9 +120,8 @@ struct Implicit {
 struct Factor {
     system: SpdSystem,
     anchored: AnchoredSolve,
-    /// This step's held node: its first dof and what the anchor adds to its three diagonal
-    /// entries.
-    held: Option<(usize, f64)>,
+    /// This step's held node.
+    held: Option<Held>,
 }
 
 impl Factor {
@@ -137,10 +136,8 @@ impl Factor {
 
     /// Adds the anchor's `d y` on the held node's dofs to `out`, scaled by `sign`.
     fn add_held(&self, y: &[f64], sign: f64, out: &mut [f64]) {
-        if let Some((first, d)) = self.held {
-            for i in first..first + 3 {
-                out[i] += sign * d * y[i];
-            }
+        if let Some(held) = self.held {
+            held.add_to(y, sign, out);
         }
     }
 }
@@ -399,11 +396,11 @@ impl FemDynamics {
             .filter(|a| self.free.get(3 * a.node..3 * a.node + 3).is_some_and(|f| f.iter().any(|&f| f != 0.0)))
             .map(|a| {
                 let (c_scale, k_scale) = implicit_scales(dt, trapezoidal);
-                (3 * a.node, a.diagonal(c_scale, k_scale))
+                Held { unknowns: std::array::from_fn(|c| 3 * a.node + c), diagonal: a.diagonal(c_scale, k_scale) }
             });
         work.factor.held = held;
-        if let Some((first, d)) = held
-            && let Err(e) = work.factor.anchored.prepare(&mut work.factor.system, [first, first + 1, first + 2], d)
+        if let Some(held) = held
+            && let Err(e) = work.factor.anchored.prepare(&mut work.factor.system, held)
         {
             self.implicit = Some(work);
             return Err(e);

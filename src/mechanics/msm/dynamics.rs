@@ -10,7 +10,7 @@ use super::forces::{
 };
 use super::model::MsmModel;
 use super::reduction::DofMap;
-use crate::mechanics::anchor::{Anchor, AnchoredSolve};
+use crate::mechanics::anchor::{Anchor, AnchoredSolve, Held};
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::newton_krylov::{
     KRYLOV_MAX_ITERATIONS, NEWTON_MAX_ITERATIONS, NewtonKrylov, NewtonSolves, StepEquation,
@@ -119,7 +119,7 @@ struct LatticeStep<'a> {
     system: &'a mut SpdSystem,
     anchored: &'a AnchoredSolve,
     /// The held node's unknowns and what the anchor adds to their diagonal.
-    held: Option<([usize; 3], f64)>,
+    held: Option<Held>,
     /// `m + c_s c` of each unknown.
     mass: &'a [f64],
     x0: &'a [Vec<f64>; 3],
@@ -156,10 +156,8 @@ impl StepEquation for LatticeStep<'_> {
                 r[u] = v_scale * m * self.v[c][p] + w_n * self.f0[c][p] + w_e * self.f[c][p] - self.mass[u] * y[u];
             }
         }
-        if let Some((unknowns, d)) = self.held {
-            for j in unknowns {
-                r[j] -= d * y[j];
-            }
+        if let Some(held) = self.held {
+            held.add_to(y, -1.0, r);
         }
     }
 
@@ -175,10 +173,8 @@ impl StepEquation for LatticeStep<'_> {
                 out[u] = k_scale * self.out_nodes[dof % 3][dof / 3] + self.mass[u] * p[u];
             }
         }
-        if let Some((unknowns, d)) = self.held {
-            for j in unknowns {
-                out[j] += d * p[j];
-            }
+        if let Some(held) = self.held {
+            held.add_to(p, 1.0, out);
         }
     }
 
@@ -330,11 +326,10 @@ impl Dynamics {
         Ok(())
     }
 
-    /// One backward Euler step with the rest tangent `K_0` factorised once:
-    /// `(M + dt C + dt^2 K_0) v' = M v + dt f(x)` is its first iterate, then Newton's method
-    /// solves the step's equation with the force at its end, `(M + dt C) v' = M v + dt f(x + dt
-    /// v')`, each linear solve by conjugate gradients on the springs' tangent preconditioned with
-    /// that factor ([`crate::mechanics::newton_krylov`]; [`Dynamics::newton_solves`] counts
+    /// One backward Euler step with the rest tangent `K_0` factorised once (`M + dt C + dt^2
+    /// K_0`): Newton's method solves the step's equation with the force at its end, `(M + dt C)
+    /// v' = M v + dt f(x + dt v')`, from the step linearised with the tangent of its start, each
+    /// linear solve by conjugate gradients on the springs' tangent preconditioned with that factor ([`crate::mechanics::newton_krylov`]; [`Dynamics::newton_solves`] counts
     /// them), then `x += dt v'`. The factor is rebuilt when `dt`, the parameters or the fixed
     /// nodes change; a step that reuses it allocates nothing.
     pub fn step_prefactored(&mut self, model: &MsmModel, dt: f64) -> Result<(), SparseError> {
@@ -342,9 +337,9 @@ impl Dynamics {
     }
 
     /// One step of Newmark's average acceleration (the trapezoidal rule: no numerical damping,
-    /// second order) with the rest tangent `K_0` factorised once: `(M + dt/2 C + dt^2/4 K_0) dx =
-    /// dt M v + dt^2/2 f(x)` is its first iterate, then Newton's method solves the step's equation
-    /// with `(f(x) + f(x + dx)) / 2` for `f(x)` as [`Dynamics::step_prefactored`] does; then
+    /// second order) with the rest tangent `K_0` factorised once (`M + dt/2 C + dt^2/4 K_0`):
+    /// Newton's method solves the step's equation, `(M + dt/2 C) dx = dt M v + dt^2/4 (f(x) +
+    /// f(x + dx))`, as [`Dynamics::step_prefactored`] does; then
     /// `v' = 2 dx / dt - v` and `x += dx`. Linearised at rest alone it blew up under a 2 cm
     /// corner drag of the hex lattice at 8^3 and 1 ms.
     pub fn step_newmark(&mut self, model: &MsmModel, dt: f64) -> Result<(), SparseError> {
@@ -392,9 +387,9 @@ impl Dynamics {
         let held = match held(self.anchor, &self.free) {
             Some(a) => {
                 let unknowns = std::array::from_fn(|c| work.tangent.dofs.map[3 * a.node + c].0 as usize);
-                let d = a.diagonal(c_scale, k_scale);
-                work.anchored.prepare(&mut work.tangent.system, unknowns, d)?;
-                Some((unknowns, d))
+                let held = Held { unknowns, diagonal: a.diagonal(c_scale, k_scale) };
+                work.anchored.prepare(&mut work.tangent.system, held)?;
+                Some(held)
             }
             None => None,
         };
