@@ -71,13 +71,15 @@ pub struct FemDynamics {
     /// evaluation (warm start of the next), and the buffer the next one writes.
     rotations: Vec<[f64; 4]>,
     next_rotations: Vec<[f64; 4]>,
-    /// Positions and rest positions component-wise (`[c][node]`), for the corotated elements.
+    /// Positions component-wise (`[c][node]`), for the corotated elements.
     x_components: [Vec<f64>; 3],
+    /// Rest positions component-wise, for a step on component-wise state.
     rest_components: [Vec<f64>; 3],
     /// The element matrix in the corners' parity basis, where it has that form.
     parity: Option<ParityBlocks>,
-    /// Each element's corotated force on its eight nodes (filled in parallel, gathered in order).
-    element_forces: Vec<[f64; 24]>,
+    /// The force on every node, component-wise (`[c][node]`), where the corotated elements'
+    /// forces are summed.
+    f_components: [Vec<f64>; 3],
     /// Whether the element loop may use the physics pool ([`crate::mechanics::parallel`]).
     pub parallel: bool,
     /// The most iterations of each element's rotation update per force evaluation
@@ -143,15 +145,13 @@ impl Factor {
 }
 
 /// The corotational implicit steps' solver ([`crate::mechanics::newton_krylov`]) and buffers
-/// (interleaved, but `zeros`).
+/// (interleaved).
 #[derive(Debug)]
 struct Krylov {
     newton: NewtonKrylov,
     /// The step's start positions and force.
     x0: Vec<f64>,
     f0: Vec<f64>,
-    /// Zero rest positions: the corotated element kernel on an increment is `R K_e R^T p_e`.
-    zeros: [Vec<f64>; 3],
 }
 
 /// The corotational implicit step's equation for [`NewtonKrylov`]: the tangent is the stiffness
@@ -162,7 +162,6 @@ struct CorotationalStep<'a> {
     factor: &'a mut Factor,
     x0: &'a [f64],
     f0: &'a [f64],
-    zeros: &'a [Vec<f64>; 3],
     /// `a` (mass), `k` (stiffness), `v_s`, `w_n`, `w_e` and the position's scale `d` of `y`.
     scales: [f64; 6],
 }
@@ -184,7 +183,7 @@ impl StepEquation for CorotationalStep<'_> {
 
     fn product(&mut self, p: &[f64], out: &mut [f64]) {
         let [a, k_scale, ..] = self.scales;
-        self.fem.warped_system_product(p, a, k_scale, self.zeros, out);
+        self.fem.warped_system_product(p, a, k_scale, out);
         self.factor.add_held(p, 1.0, out);
     }
 
@@ -229,7 +228,7 @@ impl FemDynamics {
             x_components: std::array::from_fn(|_| vec![0.0; g.num_nodes()]),
             rest_components: std::array::from_fn(|c| (0..g.num_nodes()).map(|p| g.position(p)[c]).collect()),
             parity,
-            element_forces: vec![[0.0; 24]; elements],
+            f_components: std::array::from_fn(|_| vec![0.0; g.num_nodes()]),
             parallel: true,
             rotation_iterations: ROTATION_ITERATIONS,
             rotation_tolerance: ROTATION_TOLERANCE,
@@ -284,31 +283,38 @@ impl FemDynamics {
                         self.x_components[c][p] = x[c];
                     }
                 }
-                // Moved out while the elements read them, and back (moves only: no allocation).
-                let x = std::mem::take(&mut self.x_components);
-                self.corotated_elements([&x[0], &x[1], &x[2]]);
-                self.x_components = x;
-                self.f.copy_from_slice(&self.f_ext);
-                let f = &mut self.f;
-                gather(self.model.elements(), &self.element_forces, |p, c, fe| f[3 * p + c] -= fe);
+                for (p, f) in self.f_ext.chunks_exact(3).enumerate() {
+                    for c in 0..3 {
+                        self.f_components[c][p] = f[c];
+                    }
+                }
+                // Moved out while the elements read and write them, and back (moves only: no
+                // allocation).
+                let (x, mut f) = (std::mem::take(&mut self.x_components), std::mem::take(&mut self.f_components));
+                self.corotated_elements([&x[0], &x[1], &x[2]], &mut f);
+                (self.x_components, self.f_components) = (x, f);
+                for (p, f) in self.f.chunks_exact_mut(3).enumerate() {
+                    for c in 0..3 {
+                        f[c] = self.f_components[c][p];
+                    }
+                }
             }
         }
     }
 
-    /// Every element's rotation moved on and its corotated force into `element_forces`, at the
+    /// Every element's rotation moved on and `out[c][node] -= ` its corotated force, at the
     /// component-wise positions `x`.
-    fn corotated_elements(&mut self, x: [&[f64]; 3]) {
-        let rest = &self.rest_components;
+    fn corotated_elements(&mut self, x: [&[f64]; 3], out: &mut [Vec<f64>; 3]) {
         let at = Corotation {
             x,
-            rest: [&rest[0], &rest[1], &rest[2]],
+            rest_spacing: self.model.grid.h(),
             ke: &self.model.ke,
             parity: self.parity.as_ref(),
             grid: self.model.grid,
             iterations: self.rotation_iterations,
             tolerance: self.rotation_tolerance,
         };
-        at.all(&self.rotations, &mut self.next_rotations, &mut self.element_forces, self.parallel);
+        at.all(&self.rotations, &mut self.next_rotations, out, self.parallel);
         std::mem::swap(&mut self.rotations, &mut self.next_rotations);
     }
 
@@ -317,11 +323,10 @@ impl FemDynamics {
     /// interleaved force in the same order (the same bits), for a step on component-wise state.
     /// Allocation-free.
     pub fn corotated_forces_components(&mut self, x: [&[f64]; 3], f_ext: &[Vec<f64>; 3], out: &mut [Vec<f64>; 3]) {
-        self.corotated_elements(x);
         for (out, f_ext) in out.iter_mut().zip(f_ext) {
             out.copy_from_slice(f_ext);
         }
-        gather(self.model.elements(), &self.element_forces, |p, c, fe| out[c][p] -= fe);
+        self.corotated_elements(x, out);
     }
 
     /// The elastic + external force at the current positions.
@@ -371,7 +376,6 @@ impl FemDynamics {
             stale => {
                 self.implicit = stale; // kept if the new factorisation fails
                 let dofs = self.x.len();
-                let nodes = dofs / 3;
                 Implicit {
                     factor: Factor {
                         system: self.prefactored_system(dt, trapezoidal)?,
@@ -384,7 +388,6 @@ impl FemDynamics {
                         newton: NewtonKrylov::new(dofs, self.krylov_iterations, self.newton_iterations),
                         x0: vec![0.0; dofs],
                         f0: vec![0.0; dofs],
-                        zeros: std::array::from_fn(|_| vec![0.0; nodes]),
                     }),
                 }
             }
@@ -459,18 +462,17 @@ impl FemDynamics {
         k.f0.copy_from_slice(&self.f);
         k.newton.krylov_max = self.krylov_iterations;
         k.newton.newton_max = self.newton_iterations;
-        let Krylov { newton, x0, f0, zeros } = k;
-        let mut step =
-            CorotationalStep { fem: self, factor, x0, f0, zeros, scales: [a, k_scale, v_scale, w_n, w_e, d_scale] };
+        let Krylov { newton, x0, f0 } = k;
+        let mut step = CorotationalStep { fem: self, factor, x0, f0, scales: [a, k_scale, v_scale, w_n, w_e, d_scale] };
         let solved = newton.solve(&mut step, y, scale);
         self.x.copy_from_slice(&k.x0);
         solved
     }
 
     /// `out = (m_scale M p + k_scale K_w p)` on the free dofs (0 on the fixed ones), `K_w` the
-    /// stiffness warped by each element's rotation of the last force evaluation. `zeros` is
-    /// borrowed as the zero rest positions of the element kernel.
-    fn warped_system_product(&mut self, p: &[f64], m_scale: f64, k_scale: f64, zeros: &[Vec<f64>; 3], out: &mut [f64]) {
+    /// stiffness warped by each element's rotation of the last force evaluation: the element
+    /// kernel on a rest shape of zero size, with no iteration of the rotations.
+    fn warped_system_product(&mut self, p: &[f64], m_scale: f64, k_scale: f64, out: &mut [f64]) {
         for (n, p) in p.chunks_exact(3).enumerate() {
             for c in 0..3 {
                 self.x_components[c][n] = p[c];
@@ -478,7 +480,7 @@ impl FemDynamics {
         }
         let at = Corotation {
             x: [&self.x_components[0], &self.x_components[1], &self.x_components[2]],
-            rest: [&zeros[0], &zeros[1], &zeros[2]],
+            rest_spacing: 0.0,
             ke: &self.model.ke,
             parity: self.parity.as_ref(),
             grid: self.model.grid,
@@ -486,9 +488,15 @@ impl FemDynamics {
             tolerance: self.rotation_tolerance,
         };
         // No iteration: `next_rotations` receives the rotations unchanged and is not swapped in.
-        at.all(&self.rotations, &mut self.next_rotations, &mut self.element_forces, self.parallel);
-        out.fill(0.0);
-        gather(self.model.elements(), &self.element_forces, |n, c, fe| out[3 * n + c] += fe);
+        for f in &mut self.f_components {
+            f.fill(0.0);
+        }
+        at.all(&self.rotations, &mut self.next_rotations, &mut self.f_components, self.parallel);
+        for (n, out) in out.chunks_exact_mut(3).enumerate() {
+            for c in 0..3 {
+                out[c] = -self.f_components[c][n];
+            }
+        }
         for i in 0..out.len() {
             out[i] = (k_scale * out[i] + m_scale * self.mass[i] * p[i]) * self.free[i];
         }
@@ -524,8 +532,8 @@ impl FemDynamics {
     /// Bytes held by the prefactored step's factor (0 before its first step).
     pub fn factor_memory_bytes(&self) -> usize {
         self.implicit.as_ref().map_or(0, |w| {
-            // The solver's vectors, the step's start (two vectors) and the zero rest positions.
-            let krylov = w.krylov.as_ref().map_or(0, |k| k.newton.memory_bytes() + 3 * k.x0.len() * 8);
+            // The solver's vectors and the step's start (two vectors).
+            let krylov = w.krylov.as_ref().map_or(0, |k| k.newton.memory_bytes() + 2 * k.x0.len() * 8);
             w.factor.system.memory_bytes() + w.factor.anchored.memory_bytes() + w.rhs.len() * 8 + krylov
         })
     }
@@ -534,8 +542,8 @@ impl FemDynamics {
     pub fn memory_bytes(&self) -> usize {
         let vectors = 8 * self.x.len() * 8
             + self.rotations.len() * 64
-            + self.model.elements().len() * (64 + 192)
-            + 6 * 8 * self.rest.len() / 3
+            + self.model.elements().len() * 64
+            + 9 * 8 * self.rest.len() / 3
             + 24 * 24 * 8;
         vectors + self.factor_memory_bytes()
     }
@@ -545,18 +553,6 @@ impl FemDynamics {
 /// `(dt / 2, dt^2 / 4)` for the trapezoidal rule.
 fn implicit_scales(dt: f64, trapezoidal: bool) -> (f64, f64) {
     if trapezoidal { (0.5 * dt, 0.25 * dt * dt) } else { (dt, dt * dt) }
-}
-
-/// Hands every element force component to `sub(node, component, value)` in element order, on
-/// one thread: the same sums, bit for bit, however the elements were split, in either layout.
-fn gather(elements: &[[usize; 8]], element_forces: &[[f64; 24]], mut sub: impl FnMut(usize, usize, f64)) {
-    for (nodes, fe) in elements.iter().zip(element_forces) {
-        for (a, &p) in nodes.iter().enumerate() {
-            for c in 0..3 {
-                sub(p, c, fe[3 * a + c]);
-            }
-        }
-    }
 }
 
 /// The most iterations of the rotation extraction per force evaluation, from the last
@@ -634,9 +630,8 @@ mod tests {
         let mut fem = turned(&r);
         let dofs = fem.x.len();
         let p: Vec<f64> = (0..dofs).map(|i| (0.37 * i as f64).sin()).collect();
-        let zeros: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; dofs / 3]);
         let mut warped = vec![0.0; dofs];
-        fem.warped_system_product(&p, 0.0, 1.0, &zeros, &mut warped);
+        fem.warped_system_product(&p, 0.0, 1.0, &mut warped);
         // R K R^T p, the rest stiffness in the turned frame.
         let mut k_local = vec![0.0; dofs];
         fem.model.apply(&rotate(&r, &p, true), &mut k_local);
@@ -677,9 +672,8 @@ mod tests {
             let f = start.forces().to_vec();
             let (v_scale, f_scale) = if trapezoidal { (dt, 0.5 * dt * dt) } else { (1.0, dt) };
             let b: Vec<f64> = (0..y.len()).map(|i| v_scale * start.mass[i] * v0[i] + f_scale * f[i]).collect();
-            let zeros: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; y.len() / 3]);
             let mut ay = vec![0.0; y.len()];
-            start.warped_system_product(&y, 1.0 + c_scale * start.alpha, k_scale, &zeros, &mut ay);
+            start.warped_system_product(&y, 1.0 + c_scale * start.alpha, k_scale, &mut ay);
             let norm = |v: &[f64]| v.iter().map(|v| v * v).sum::<f64>().sqrt();
             let residual: Vec<f64> = b.iter().zip(&ay).map(|(b, a)| b - a).collect();
             let relative = norm(&residual) / norm(&b);
@@ -692,7 +686,7 @@ mod tests {
             step(&mut frozen);
             let y0: Vec<f64> =
                 if trapezoidal { frozen.x.iter().zip(&x0).map(|(x, x0)| x - x0).collect() } else { frozen.v.clone() };
-            start.warped_system_product(&y0, 1.0 + c_scale * start.alpha, k_scale, &zeros, &mut ay);
+            start.warped_system_product(&y0, 1.0 + c_scale * start.alpha, k_scale, &mut ay);
             let residual: Vec<f64> = b.iter().zip(&ay).map(|(b, a)| b - a).collect();
             let frozen_relative = norm(&residual) / norm(&b);
             assert!(frozen_relative > 1e3 * relative, "rest factor alone: {frozen_relative}, warped {relative}");

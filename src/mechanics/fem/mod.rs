@@ -11,6 +11,7 @@ pub mod corotation;
 pub mod dynamics;
 pub mod element;
 pub mod graded;
+mod lanes;
 pub mod stencil;
 
 use crate::mechanics::cases::{CaseSolution, LoadCase};
