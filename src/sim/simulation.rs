@@ -325,32 +325,40 @@ impl Simulation {
     /// Why the state is not good, if it is not: a NaN, a node more than the cube's side from
     /// its rest position (bounded relative to the cube, not to some absolute size), or a kinetic
     /// energy of the whole mass moving at 10 m/s.
+    ///
+    /// The guard runs every step, so its common case reads each array once: a NaN or infinity
+    /// fails the displacement's and the energy's comparisons too (both are written to fail on a
+    /// NaN), and only a state that fails them is searched for one, to name the cause.
     fn unhealthy(&self) -> Option<Unhealthy> {
         let l = crate::mechanics::grid::CUBE_SIDE_M;
         let (x, v) = (self.tissue.x(), self.tissue.v());
-        // Folds without an early exit (and no sum of doubles, which runs in order): the compiler
-        // vectorises them, and the guard runs every step.
-        let finite = x.iter().chain(v).all(|c| c.iter().fold(true, |ok, v| ok & v.is_finite()));
-        if !finite {
-            return Some(Unhealthy::NonFinite);
-        }
         // A cube held nowhere may move as a whole (a drag carries it along): its mean
         // displacement is motion, not deformation.
         let held = self.tissue.free().contains(&0.0);
-        for c in 0..3 {
+        // Folds without an early exit (and no sum of doubles, which runs in order): the compiler
+        // vectorises them.
+        // False on a NaN.
+        let within = |d: f64, bound: f64| d <= bound;
+        let outside = (0..3).any(|c| {
             let shift = if held {
                 0.0
             } else {
                 x[c].iter().zip(&self.rest[c]).map(|(x, r)| x - r).sum::<f64>() / x[c].len() as f64
             };
-            if x[c].iter().zip(&self.rest[c]).fold(false, |out, (x, r)| out | ((x - r - shift).abs() > l)) {
-                return Some(Unhealthy::OutsideCube);
-            }
+            x[c].iter().zip(&self.rest[c]).fold(false, |out, (x, r)| out | !within((x - r - shift).abs(), l))
+        });
+        let energetic = !within(self.tissue.kinetic_energy(), 0.5 * self.tissue.total_mass() * 10.0 * 10.0);
+        if !(outside || energetic) {
+            return None;
         }
-        if self.tissue.kinetic_energy() > 0.5 * self.tissue.total_mass() * 10.0 * 10.0 {
-            return Some(Unhealthy::Energy);
-        }
-        None
+        let finite = x.iter().chain(v).all(|c| c.iter().all(|v| v.is_finite()));
+        Some(if !finite {
+            Unhealthy::NonFinite
+        } else if outside {
+            Unhealthy::OutsideCube
+        } else {
+            Unhealthy::Energy
+        })
     }
 
     /// Sets the probe's contact: on the material's surface compliance (`Some`), or the running
