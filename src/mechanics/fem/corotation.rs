@@ -23,10 +23,10 @@
 //! loops over the element's nodes are unrolled in the source, so that its values stay in
 //! registers; each group's forces are summed on the nodes as soon as they are computed.
 //!
-//! Measured (a scratch harness, one core, 16^3 nodes, one evaluation of all 3,375 elements with
-//! their sums on the nodes, medians of runs alternating on this machine): 190 us for the element
-//! loop on arrays of lanes plus 35 to 45 us for the gather of a per-element buffer before;
-//! 134 to 157 us now.
+//! Measured (a scratch harness, one core, 16^3 nodes, one evaluation of all 3,375 elements):
+//! before, the element loop on arrays of lanes alone took 184 to 261 us, and a second pass
+//! summed a per-element buffer on the nodes; now the loop with its sums on the nodes takes 134
+//! to 157 us.
 
 use super::element::{ElementStiffness, NODE_SIGNS};
 use super::lanes::Lane;
