@@ -6,7 +6,8 @@ use std::sync::OnceLock;
 
 /// Below this many items a loop runs on the calling thread: a split costs some 30 us, more than
 /// it saves on the 343 elements of the 8^3 corotational FEM (`bench`: 88 us on one thread,
-/// 121 us on two; 1.22x faster on two at 16^3).
+/// 121 us on two; 1.22x faster on two at 16^3). Measured when the corotational elements split
+/// by rows; they now split by layers of elements, half of them a pass (not measured again).
 pub const MIN_PARALLEL_ITEMS: usize = 1000;
 
 /// The pool, one thread per core; `None` on one core or where no thread can be started.

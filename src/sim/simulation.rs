@@ -326,17 +326,16 @@ impl Simulation {
     /// its rest position (bounded relative to the cube, not to some absolute size), or a kinetic
     /// energy of the whole mass moving at 10 m/s.
     ///
-    /// The guard runs every step, so its common case reads each array once: a NaN or infinity
-    /// fails the displacement's and the energy's comparisons too (both are written to fail on a
-    /// NaN), and only a state that fails them is searched for one, to name the cause.
+    /// The guard runs every step, so its common case reads each array once (the positions twice
+    /// for a cube held nowhere, whose mean shift comes first): a NaN or infinity fails the
+    /// displacement's and the energy's comparisons too (both are written to fail on a NaN), and
+    /// only a state that fails them is searched for one, to name the cause.
     fn unhealthy(&self) -> Option<Unhealthy> {
         let l = crate::mechanics::grid::CUBE_SIDE_M;
         let (x, v) = (self.tissue.x(), self.tissue.v());
         // A cube held nowhere may move as a whole (a drag carries it along): its mean
         // displacement is motion, not deformation.
         let held = self.tissue.free().contains(&0.0);
-        // Folds without an early exit (and no sum of doubles, which runs in order): the compiler
-        // vectorises them.
         // False on a NaN.
         let within = |d: f64, bound: f64| d <= bound;
         let outside = (0..3).any(|c| {
@@ -345,6 +344,7 @@ impl Simulation {
             } else {
                 x[c].iter().zip(&self.rest[c]).map(|(x, r)| x - r).sum::<f64>() / x[c].len() as f64
             };
+            // A fold without an early exit: the compiler vectorises it.
             x[c].iter().zip(&self.rest[c]).fold(false, |out, (x, r)| out | !within((x - r - shift).abs(), l))
         });
         let energetic = !within(self.tissue.kinetic_energy(), 0.5 * self.tissue.total_mass() * 10.0 * 10.0);

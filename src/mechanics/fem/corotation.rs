@@ -2,18 +2,21 @@
 //!
 //! `R` is each element's rotation, kept as a unit quaternion from one force evaluation to the
 //! next and moved to the polar rotation of the deformation gradient at the element's centre,
-//! `F = sum_a x_a (grad N_a)^T`, by iterations of the rotation extraction of Mueller et al. (2016)
-//! until the correction is below a tolerance (`Corotation::tolerance`):
-//! `omega = sum_c r_c x f_c / (|sum_c r_c . f_c| + eps)` over the columns of `R` and `F`, then
-//! `R <- exp(omega) R`. Here the exponential is its trig-free first order, the
-//! unit quaternion `(1, omega / 2) / |(1, omega / 2)|` (a turn of `2 atan(|omega| / 2)` about
-//! `omega`, within `|omega|^3 / 12` of `|omega|`); the iteration's fixed point, `omega = 0`, is the
-//! same polar rotation.
+//! `F = sum_a x_a (grad N_a)^T`. Each iteration measures the correction of the rotation
+//! extraction of Mueller et al. (2016), `omega = sum_c r_c x f_c / (|sum_c r_c . f_c| + eps)` over
+//! the columns of `R` and `F`, and stops once it is below a tolerance (`Corotation::tolerance`);
+//! else it turns `R <- exp(omega) R` by Newton's `omega` on the same equation
+//! (`newton_half_turn`: quadratic, where Mueller's fixed-point step shrinks the error only
+//! threefold a step near a rigid turn), or by Mueller's where Newton's matrix is near singular.
+//! Here the exponential is its trig-free first order, the unit quaternion
+//! `(1, omega / 2) / |(1, omega / 2)|` (a turn of `2 atan(|omega| / 2)` about `omega`, within
+//! `|omega|^3 / 12` of `|omega|`); the iteration's fixed point, `omega = 0`, is the same polar
+//! rotation.
 //!
 //! The elements of a grid row (along x) have the same node pattern at consecutive node indices,
 //! so on the component-wise positions `x[c][node]` the node `a` of four neighbouring elements is
 //! four consecutive values: every operation runs on four lanes in an AVX2 register where the CPU
-//! has it (`fem::lanes`; no fused multiply-add: one element's force has the same bits in any
+//! has it (`corotation::lanes`; no fused multiply-add: one element's force has the same bits in any
 //! lane and on any path). A row whose length is not a multiple of four ends with four elements
 //! that overlap the ones before; the rotations are double-buffered (read from the last
 //! evaluation's, written to this one's), so an element computed twice gives the same bits twice,
@@ -28,9 +31,11 @@
 //! summed a per-element buffer on the nodes; now the loop with its sums on the nodes takes 134
 //! to 157 us.
 
+mod lanes;
+
 use super::element::{ElementStiffness, NODE_SIGNS};
-use super::lanes::Lane;
 use crate::mechanics::grid::Grid;
+use lanes::Lane;
 
 /// A vector of three lanes.
 type V3<L> = [L; 3];
@@ -244,8 +249,8 @@ fn group_start(m: usize, g: usize) -> usize {
     if m < 4 { g } else { (4 * g).min(m - 4) }
 }
 
-/// `out[c][node] -= ` the forces of one group of elements (the first at `at` along its row,
-/// whose lowest node is `node`, an index into `out`), its lanes `skip..lanes` (an overlapping
+/// `out[c][node + offset of a] -= ` the forces of one group of elements (`node` is the group's
+/// first element's lowest node, an index into `out`), its lanes `skip..lanes` (an overlapping
 /// last group skips the elements the one before did). Each of a full group's 24 values is one
 /// four-wide read-modify-write on four consecutive nodes.
 #[inline(always)]
@@ -267,6 +272,50 @@ fn scatter(forces: &GroupForces, node: usize, n: usize, lanes: usize, skip: usiz
             }
         });
     });
+}
+
+/// Half of Newton's turn `omega` towards the polar rotation of `F` from the rotation `R`:
+/// `R <- exp(omega) R` makes `B = F R^T` symmetric to first order where
+/// `(tr(B) I - sym(B)) omega = t`, `t = sum_c r_c x f_c` (`axis`) and `tr(B) = sum_c r_c . f_c`
+/// (`trace`). The fixed-point step `omega = t / tr(B)` of Mueller et al. (2016) takes the same
+/// matrix as `tr(B) I`: near a rigid turn (`B ~ I`) it moves `2 / 3` of the way and the error
+/// falls by only 3 a step, where Newton's falls quadratically. Where `tr(B) I - sym(B)` is near
+/// singular (`det < 0.05 tr(B)^3`, an element crushed or inverted) the lane keeps that
+/// fixed-point step, `mueller`, which is robust there.
+#[inline(always)]
+fn newton_half_turn<L: Lane>(r: &[V3<L>; 3], f: &[V3<L>; 3], axis: V3<L>, trace: L, mueller: V3<L>) -> V3<L> {
+    // sym(B)[i][j] = sum_c (F[i][c] R[j][c] + F[j][c] R[i][c]) / 2.
+    let mut b = [[L::splat(0.0); 3]; 3];
+    unrolled!(i in [0, 1, 2] {
+        unrolled!(j in [0, 1, 2] {
+            if j >= i {
+                let mut s = L::splat(0.0);
+                unrolled!(c in [0, 1, 2] {
+                    s = s + f[i][c] * r[j][c] + f[j][c] * r[i][c];
+                });
+                b[i][j] = L::splat(0.5) * s;
+            }
+        });
+    });
+    let (m00, m11, m22) = (trace - b[0][0], trace - b[1][1], trace - b[2][2]);
+    let zero = L::splat(0.0);
+    let (m01, m02, m12) = (zero - b[0][1], zero - b[0][2], zero - b[1][2]);
+    // The adjugate (symmetric) and the determinant.
+    let (a00, a11, a22) = (m11 * m22 - m12 * m12, m00 * m22 - m02 * m02, m00 * m11 - m01 * m01);
+    let (a01, a02, a12) = (m02 * m12 - m01 * m22, m01 * m12 - m02 * m11, m01 * m02 - m00 * m12);
+    let det = m00 * a00 + m01 * a01 + m02 * a02;
+    let half = L::splat(0.5) / det;
+    let t = axis;
+    let hn = [
+        half * (a00 * t[0] + a01 * t[1] + a02 * t[2]),
+        half * (a01 * t[0] + a11 * t[1] + a12 * t[2]),
+        half * (a02 * t[0] + a12 * t[1] + a22 * t[2]),
+    ];
+    // Newton's where 0.05 tr(B)^3 <= det and eps <= tr(B), else Mueller's.
+    let floor = L::splat(0.05) * trace * trace * trace;
+    let eps = L::splat(f64::EPSILON);
+    let pick = |i: usize| eps.select_at_most(trace, floor.select_at_most(det, hn[i], mueller[i]), mueller[i]);
+    [pick(0), pick(1), pick(2)]
 }
 
 /// What every element's corotated force reads.
@@ -345,16 +394,26 @@ impl Corotation<'_> {
             });
             let scale = L::splat(0.5) / (denom.abs() + L::splat(f64::EPSILON));
             let h = [axis[0] * scale, axis[1] * scale, axis[2] * scale]; // omega / 2
-            if dot(h, h).all_at_most(stop) {
+            let size = dot(h, h);
+            if size.all_at_most(stop) {
                 break;
             }
-            // (1, h) * q, normalised.
+            let h = newton_half_turn(&r, &f, axis, denom, h);
+            // (1, h) * q, normalised; a lane already within the tolerance keeps its rotation
+            // (and measures the same correction again), as it would alone.
             let (w, v) = (q[0], [q[1], q[2], q[3]]);
             let hv = cross(h, v);
             let nw = w - dot(h, v);
             let nv: V3<L> = [v[0] + w * h[0] + hv[0], v[1] + w * h[1] + hv[1], v[2] + w * h[2] + hv[2]];
             let inv = L::splat(1.0) / (nw * nw + dot(nv, nv)).sqrt();
-            q = [nw * inv, nv[0] * inv, nv[1] * inv, nv[2] * inv];
+            let turned = [nw * inv, nv[0] * inv, nv[1] * inv, nv[2] * inv];
+            let stop = L::splat(stop);
+            q = [
+                size.select_at_most(stop, q[0], turned[0]),
+                size.select_at_most(stop, q[1], turned[1]),
+                size.select_at_most(stop, q[2], turned[2]),
+                size.select_at_most(stop, q[3], turned[3]),
+            ];
         }
         for (l, slot) in next.iter_mut().enumerate().take(L::W) {
             *slot = [q[0].lane(l), q[1].lane(l), q[2].lane(l), q[3].lane(l)];
@@ -414,7 +473,7 @@ impl Corotation<'_> {
             next: &mut [[f64; 4]],
             out: &mut [&mut [f64]; 3],
         ) {
-            at.layer_of::<super::lanes::F64x4>(k, last, next, out);
+            at.layer_of::<lanes::F64x4>(k, last, next, out);
         }
         #[cfg(target_arch = "x86_64")]
         if self.grid.n() > 4 && std::arch::is_x86_feature_detected!("avx2") {
@@ -434,6 +493,8 @@ impl Corotation<'_> {
     pub fn all(self, last: &[[f64; 4]], next: &mut [[f64; 4]], out: &mut [Vec<f64>; 3], parallel: bool) {
         let n = self.grid.n();
         let m = n - 1;
+        debug_assert!(last.len() == m * m * m && next.len() == m * m * m, "one rotation an element");
+        debug_assert!(out.iter().all(|o| o.len() == n * n * n), "one force a node");
         let (layer_nodes, layer_elements) = (n * n, m * m);
         let pool = crate::mechanics::parallel::pool()
             .filter(|_| parallel && next.len() >= crate::mechanics::parallel::MIN_PARALLEL_ITEMS);
@@ -499,11 +560,15 @@ mod tests {
         x
     }
 
-    /// `f` on object A's elements at positions `x` (the dense product where `dense`).
+    /// Two iterations of the rotations, to a tolerance none reaches.
+    const TWO: (usize, f64) = (2, 1e-12);
+
+    /// `f` on object A's elements at positions `x`, the rotations iterated `turn = (most
+    /// iterations, tolerance)` (the dense product where `dense`).
     fn with_corotation<R>(
         grid: Grid,
         x: &[Vec<f64>; 3],
-        iterations: usize,
+        (iterations, tolerance): (usize, f64),
         dense: bool,
         f: impl FnOnce(&Corotation<'_>, &FemModel) -> R,
     ) -> R {
@@ -516,7 +581,7 @@ mod tests {
             parity: parity.as_ref(),
             grid,
             iterations,
-            tolerance: 1e-12,
+            tolerance,
         };
         f(&at, &fem)
     }
@@ -526,10 +591,10 @@ mod tests {
     fn element_forces(
         grid: Grid,
         x: &[Vec<f64>; 3],
-        iterations: usize,
+        turn: (usize, f64),
         dense: bool,
     ) -> (Vec<[f64; 4]>, Vec<[f64; 24]>) {
-        with_corotation(grid, x, iterations, dense, |at, fem| {
+        with_corotation(grid, x, turn, dense, |at, fem| {
             let mut out = (Vec::new(), Vec::new());
             for nodes in fem.elements() {
                 let (mut next, mut forces) = ([[0.0; 4]], [[0.0; 4]; 24]);
@@ -545,11 +610,11 @@ mod tests {
     fn node_forces(
         grid: Grid,
         x: &[Vec<f64>; 3],
-        iterations: usize,
+        turn: (usize, f64),
         parallel: bool,
         dense: bool,
     ) -> (Vec<[f64; 4]>, [Vec<f64>; 3]) {
-        with_corotation(grid, x, iterations, dense, |at, fem| {
+        with_corotation(grid, x, turn, dense, |at, fem| {
             let elements = fem.elements().len();
             let (last, mut next) = (vec![IDENTITY; elements], vec![[0.0; 4]; elements]);
             let mut out: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; grid.num_nodes()]);
@@ -560,11 +625,12 @@ mod tests {
 
     #[test]
     fn every_elements_force_is_summed_once_on_its_nodes() {
-        // 2, 6 (one group of four and an overlapping one), 8 (two groups) and 9 elements a row.
-        for n in [3, 7, 9, 10] {
+        // 1, 2, 4 (one group of four), 6 (one group and an overlapping one), 8 (two groups) and 9
+        // elements a row.
+        for n in [2, 3, 5, 7, 9, 10] {
             let grid = Grid::new(n).unwrap();
             let x = deformed(&grid, 0.2, 1.05, 1e-3);
-            let (q, f) = element_forces(grid, &x, 2, false);
+            let (q, f) = element_forces(grid, &x, TWO, false);
             let fem = FemModel::new(grid, &Material::object_a());
             let mut expected: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; grid.num_nodes()]);
             for (nodes, fe) in fem.elements().iter().zip(&f) {
@@ -574,7 +640,7 @@ mod tests {
                     }
                 }
             }
-            let (qn, got) = node_forces(grid, &x, 2, false, false);
+            let (qn, got) = node_forces(grid, &x, TWO, false, false);
             assert_eq!(q, qn, "n = {n}: the rotations in lanes and alone");
             let scale = expected.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
             assert!(scale > 0.0);
@@ -589,8 +655,8 @@ mod tests {
         for n in [3, 6, 12] {
             let grid = Grid::new(n).unwrap();
             let x = deformed(&grid, 0.3, 1.0, 0.0);
-            let (q, _) = node_forces(grid, &x, 0, false, false);
-            let (q1, f) = node_forces(grid, &x, 60, false, false);
+            let (q, _) = node_forces(grid, &x, (0, 1e-12), false, false);
+            let (q1, f) = node_forces(grid, &x, (60, 1e-12), false, false);
             assert!(q.iter().all(|q| *q == IDENTITY));
             let worst = f.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
             assert!(worst < 1e-9, "n = {n}: force {worst} N on a rigid turn");
@@ -604,22 +670,28 @@ mod tests {
     #[test]
     fn every_element_has_the_same_bits_in_any_lane_and_on_any_split() {
         // 13 elements a row: three groups of four and one overlapping; 6: one and one overlapping.
-        for n in [7, 14] {
+        // Two iterations for all; then to the step's tolerance from the identity, where the
+        // elements of a group stop after different numbers of iterations.
+        let to_tolerance = (crate::mechanics::fem::dynamics::ROTATION_ITERATIONS, 1e-8);
+        for (n, turn) in [(7, TWO), (14, TWO), (7, to_tolerance), (14, to_tolerance)] {
             let grid = Grid::new(n).unwrap();
             let x = deformed(&grid, 0.2, 1.05, 1e-3);
-            let (q, f) = node_forces(grid, &x, 2, false, false);
-            let (qp, fp) = node_forces(grid, &x, 2, true, false);
+            let (q, f) = node_forces(grid, &x, turn, false, false);
+            let (qp, fp) = node_forces(grid, &x, turn, true, false);
             assert_eq!(q, qp);
             assert_eq!(f, fp);
+            // Each element alone against its lane in the loop's groups.
+            let (alone_q, _) = element_forces(grid, &x, turn, false);
+            assert_eq!(q, alone_q, "n = {n}, {turn:?}");
             // Four elements in AVX2 lanes against each alone.
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx2") {
                 #[target_feature(enable = "avx2")]
                 fn group_avx2(at: &Corotation<'_>, node: usize, next: &mut [[f64; 4]], out: &mut GroupForces) {
-                    at.elements::<crate::mechanics::fem::lanes::F64x4>(node, &[IDENTITY; 4], next, out, 0);
+                    at.elements::<lanes::F64x4>(node, &[IDENTITY; 4], next, out, 0);
                 }
-                let (alone_q, alone_f) = element_forces(grid, &x, 2, false);
-                with_corotation(grid, &x, 2, false, |at, fem| {
+                let (alone_q, alone_f) = element_forces(grid, &x, turn, false);
+                with_corotation(grid, &x, turn, false, |at, fem| {
                     let m = grid.n() - 1;
                     for (e, nodes) in fem.elements().iter().enumerate().filter(|(e, _)| e % m + 4 <= m) {
                         let (mut next, mut out) = ([[0.0; 4]; 4], [[0.0; 4]; 24]);
@@ -660,8 +732,8 @@ mod tests {
     fn the_dense_and_the_parity_products_turn_alike() {
         let grid = Grid::new(9).unwrap();
         let x = deformed(&grid, 0.4, 1.1, 2e-3);
-        let (q, f) = node_forces(grid, &x, 2, false, false);
-        let (qd, fd) = node_forces(grid, &x, 2, false, true);
+        let (q, f) = node_forces(grid, &x, TWO, false, false);
+        let (qd, fd) = node_forces(grid, &x, TWO, false, true);
         assert_eq!(q, qd, "the rotations do not depend on the product");
         let scale = fd.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
         for (a, b) in f.iter().flatten().zip(fd.iter().flatten()) {

@@ -11,7 +11,6 @@ pub mod corotation;
 pub mod dynamics;
 pub mod element;
 pub mod graded;
-mod lanes;
 pub mod stencil;
 
 use crate::mechanics::cases::{CaseSolution, LoadCase};

@@ -27,6 +27,9 @@ pub trait Lane: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Se
     fn sqrt(self) -> Self;
     /// Whether every lane is at most `bound` (false on a NaN).
     fn all_at_most(self, bound: f64) -> bool;
+    /// On each lane, `kept` where `self <= bound`, else (and on a NaN) `moved`: a choice, not
+    /// arithmetic, so the chosen lane's bits are kept.
+    fn select_at_most(self, bound: Self, kept: Self, moved: Self) -> Self;
 }
 
 impl Lane for f64 {
@@ -63,6 +66,10 @@ impl Lane for f64 {
     fn all_at_most(self, bound: f64) -> bool {
         self <= bound
     }
+    #[inline(always)]
+    fn select_at_most(self, bound: Self, kept: Self, moved: Self) -> Self {
+        if self <= bound { kept } else { moved }
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -73,8 +80,8 @@ mod avx2 {
     //! SAFETY (every `unsafe` block below): the AVX2 intrinsics need a CPU that has AVX2. An
     //! `F64x4` is used only inside functions compiled with AVX2 (`#[target_feature(enable =
     //! "avx2")]`, where its methods are inlined) that are called only after
-    //! `is_x86_feature_detected!("avx2")`; the type is private to the FEM's module for that
-    //! reason.
+    //! `is_x86_feature_detected!("avx2")`; the type is private to the corotated element's module
+    //! for that reason.
 
     use std::arch::x86_64::*;
     use std::ops::{Add, Div, Mul, Sub};
@@ -146,6 +153,11 @@ mod avx2 {
             // SAFETY: see the module's note.
             unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(self.0, _mm256_set1_pd(bound))) == 0b1111 }
         }
+        #[inline(always)]
+        fn select_at_most(self, bound: Self, kept: Self, moved: Self) -> Self {
+            // SAFETY: see the module's note.
+            Self(unsafe { _mm256_blendv_pd(moved.0, kept.0, _mm256_cmp_pd::<_CMP_LE_OQ>(self.0, bound.0)) })
+        }
     }
 }
 
@@ -165,18 +177,21 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             #[target_feature(enable = "avx2")]
-            fn four(a: &[f64; 4], b: &[f64; 4]) -> ([f64; 4], [bool; 2]) {
+            fn four(a: &[f64; 4], b: &[f64; 4]) -> ([f64; 4], [bool; 2], [f64; 4]) {
                 let (x, y) = (F64x4::load(a), F64x4::load(b));
                 let r = ((x + y) * x - y / (x.abs() + F64x4::splat(1.0))).sqrt();
                 let at_most = [F64x4::splat(1.0).all_at_most(1.0), F64x4::from_fn(|l| l as f64).all_at_most(2.5)];
-                (std::array::from_fn(|l| r.lane(l)), at_most)
+                let chosen = x.select_at_most(y, F64x4::splat(1.0), F64x4::splat(-0.0));
+                (std::array::from_fn(|l| r.lane(l)), at_most, std::array::from_fn(|l| chosen.lane(l)))
             }
             // SAFETY: the CPU has AVX2, checked just above.
-            let (four, at_most) = unsafe { four(&a, &b) };
+            let (four, at_most, chosen) = unsafe { four(&a, &b) };
             for (l, v) in four.iter().enumerate() {
                 assert_eq!(v.to_bits(), alone(l).to_bits(), "lane {l}");
+                assert_eq!(chosen[l].to_bits(), a[l].select_at_most(b[l], 1.0, -0.0).to_bits(), "lane {l}");
             }
             assert_eq!(at_most, [true, false]);
+            assert_eq!(chosen.map(f64::to_bits), [1.0, 1.0, -0.0, 1.0].map(f64::to_bits));
         }
     }
 }
