@@ -33,7 +33,7 @@
 
 mod lanes;
 
-use super::element::{ElementStiffness, NODE_SIGNS};
+use super::element::{ElementStiffness, NODE_SIDES, NODE_SIGNS};
 use crate::mechanics::grid::Grid;
 use lanes::Lane;
 
@@ -120,33 +120,18 @@ fn dense_product<L: Lane>(ke: &ElementStiffness, local: &[V3<L>; 8]) -> [V3<L>; 
     fl
 }
 
-/// The side of node `a` (spec order) along each axis: 1 on the high side, 0 on the low.
-const SIDES: [[usize; 3]; 8] = {
-    let mut sides = [[0; 3]; 8];
-    let mut a = 0;
-    while a < 8 {
-        let mut c = 0;
-        while c < 3 {
-            sides[a][c] = (NODE_SIGNS[a][c] > 0.0) as usize;
-            c += 1;
-        }
-        a += 1;
-    }
-    sides
-};
-
 /// The corner of node `a` (spec order) as bits `bx + 2 by + 4 bz`, 1 on the high side.
 #[inline(always)]
 fn corner(a: usize) -> usize {
-    let b = SIDES[a];
+    let b = NODE_SIDES[a];
     b[0] + 2 * b[1] + 4 * b[2]
 }
 
-/// Node `a`'s index from its element's lowest node on a grid of `n` nodes an edge.
+/// Node `a`'s index from its element's lowest node on `grid`.
 #[inline(always)]
-fn node_offset(a: usize, n: usize) -> usize {
-    let s = SIDES[a];
-    s[0] + n * (s[1] + n * s[2])
+fn node_offset(a: usize, grid: Grid) -> usize {
+    let s = NODE_SIDES[a];
+    grid.node(s[0], s[1], s[2])
 }
 
 /// The Walsh function of mode `m` (bits `mx + 2 my + 4 mz`) at node `a`: the product of the
@@ -254,9 +239,9 @@ fn group_start(m: usize, g: usize) -> usize {
 /// last group skips the elements the one before did). Each of a full group's 24 values is one
 /// four-wide read-modify-write on four consecutive nodes.
 #[inline(always)]
-fn scatter(forces: &GroupForces, node: usize, n: usize, lanes: usize, skip: usize, out: &mut [&mut [f64]; 3]) {
+fn scatter(forces: &GroupForces, node: usize, grid: Grid, lanes: usize, skip: usize, out: &mut [&mut [f64]; 3]) {
     unrolled!(a in [0, 1, 2, 3, 4, 5, 6, 7] {
-        let base = node + node_offset(a, n);
+        let base = node + node_offset(a, grid);
         unrolled!(c in [0, 1, 2] {
             let (dst, src) = (&mut out[c][base..base + lanes], &forces[3 * a + c]);
             if skip == 0
@@ -356,13 +341,12 @@ impl Corotation<'_> {
         out: &mut GroupForces,
         lane: usize,
     ) {
-        let n = self.grid.n();
         let inv4h = 1.0 / (4.0 * self.grid.h());
         // x_a - x_0.
         let x0: V3<L> = [L::load(&self.x[0][node..]), L::load(&self.x[1][node..]), L::load(&self.x[2][node..])];
         let mut d = [[L::splat(0.0); 3]; 8];
         unrolled!(a in [1, 2, 3, 4, 5, 6, 7] {
-            let at = node + node_offset(a, n);
+            let at = node + node_offset(a, self.grid);
             unrolled!(c in [0, 1, 2] {
                 d[a][c] = L::load(&self.x[c][at..]) - x0[c];
             });
@@ -424,7 +408,7 @@ impl Corotation<'_> {
         unrolled!(a in [1, 2, 3, 4, 5, 6, 7] {
             unrolled!(c in [0, 1, 2] {
                 let rotated = r[0][c] * d[a][0] + r[1][c] * d[a][1] + r[2][c] * d[a][2];
-                local[a][c] = rotated - L::splat(self.rest_spacing * SIDES[a][c] as f64);
+                local[a][c] = rotated - L::splat(self.rest_spacing * NODE_SIDES[a][c] as f64);
             });
         });
         let fl = match self.parity {
@@ -456,7 +440,7 @@ impl Corotation<'_> {
                 for l in (0..lanes).step_by(L::W) {
                     self.elements::<L>(row + n * n * k + at + l, &last[e + l..], &mut next[e + l..], &mut forces, l);
                 }
-                scatter(&forces, row + at, n, lanes, if m < 4 { 0 } else { 4 * g - at }, out);
+                scatter(&forces, row + at, self.grid, lanes, if m < 4 { 0 } else { 4 * g - at }, out);
             }
         }
     }

@@ -17,6 +17,22 @@ pub const NODE_SIGNS: [[f64; 3]; 8] = [
     [-1.0, 1.0, 1.0],
 ];
 
+/// The side of each node (spec order) along each axis: 1 on the high side (`NODE_SIGNS` +1), 0
+/// on the low; also the node's lattice offset from its element's lowest node.
+pub const NODE_SIDES: [[usize; 3]; 8] = {
+    let mut sides = [[0; 3]; 8];
+    let mut a = 0;
+    while a < 8 {
+        let mut c = 0;
+        while c < 3 {
+            sides[a][c] = (NODE_SIGNS[a][c] > 0.0) as usize;
+            c += 1;
+        }
+        a += 1;
+    }
+    sides
+};
+
 /// Strain-displacement matrix `B` (Voigt order 11, 22, 33, 23, 13, 12, engineering shear) at
 /// natural point `xi` of a cube of side `h`.
 pub fn strain_displacement(xi: [f64; 3], h: f64) -> SMatrix<f64, 6, 24> {

@@ -11,7 +11,7 @@
 //! the same index steps, so with AVX2 four of them are summed at a time; every node's sum is
 //! the same sequence of operations in both layouts and on both paths, so the bits are the same.
 
-use super::element::{ElementStiffness, NODE_SIGNS};
+use super::element::{ElementStiffness, NODE_SIDES};
 use crate::mechanics::grid::Grid;
 
 /// A neighbour in a node's row of `K`: the step in node index to it and its 3x3 block
@@ -78,7 +78,7 @@ impl Stencil {
                 if lo.iter().any(|&l| l < 0 || l as usize + 1 >= n) {
                     continue;
                 }
-                let local = |l: usize| NODE_SIGNS[l].map(|s| usize::from(s > 0.0));
+                let local = |l: usize| NODE_SIDES[l];
                 let Some(a) = (0..8).find(|&l| (0..3).all(|c| lo[c] as usize + local(l)[c] == at[c])) else {
                     continue;
                 };
