@@ -52,6 +52,9 @@ pub struct Simulation {
     /// Simulated time, s.
     pub time_s: f64,
     base_load: [Vec<f64>; 3],
+    /// The nodes whose load the tools changed from `base_load` in the last step: only these are
+    /// restored before the next.
+    tool_loaded: MarkedNodes,
     /// Force of the tissue on the tool, newtons (last step).
     pub tool_force: [f64; 3],
     /// Last good state (positions, velocities, time), refreshed every 100 healthy steps.
@@ -61,7 +64,7 @@ pub struct Simulation {
     steps_since_good: usize,
     rest: [Vec<f64>; 3],
     /// Nodes on the cube's surface: the only ones the probe touches.
-    surface: Vec<bool>,
+    surface: Vec<usize>,
     /// The probe on the material's surface compliance, when set.
     surface_probe: Option<super::surface_probe::SurfaceProbe>,
     /// Whether this step's probe force came from the surface compliance.
@@ -100,13 +103,14 @@ impl Simulation {
             tool: Tool::None,
             time_s: 0.0,
             base_load,
+            tool_loaded: MarkedNodes::new(nn),
             tool_force: [0.0; 3],
             good_x: zeros(),
             good_v: zeros(),
             good_time: None,
             steps_since_good: 0,
             rest,
-            surface: (0..nn).map(|p| grid.on_boundary(p)).collect(),
+            surface: (0..nn).filter(|&p| grid.on_boundary(p)).collect(),
             surface_probe: None,
             probe_on_surface: false,
             contact_forces: zeros(),
@@ -186,6 +190,7 @@ impl Simulation {
         for c in 0..3 {
             self.base_load[c].copy_from_slice(&f[c]);
         }
+        self.tool_loaded.clear();
         self.good_time = None;
     }
 
@@ -216,8 +221,10 @@ impl Simulation {
         let anchored = self.anchor_drag();
         if self.node_contact() {
             let x = self.tissue.x();
-            for c in 0..3 {
-                self.step_start_x[c].copy_from_slice(&x[c]);
+            for &p in &self.surface {
+                for c in 0..3 {
+                    self.step_start_x[c][p] = x[c][p];
+                }
             }
         }
         let stepped = self.tissue.step(self.integrator, self.dt);
@@ -379,9 +386,12 @@ impl Simulation {
         self.probe_on_surface = false;
         let carries = self.tissue.carries_contact_loads();
         let f_ext = self.tissue.f_ext_mut();
-        for c in 0..3 {
-            f_ext[c].copy_from_slice(&self.base_load[c]);
+        for &p in self.tool_loaded.nodes() {
+            for c in 0..3 {
+                f_ext[c][p] = self.base_load[c][p];
+            }
         }
+        self.tool_loaded.clear();
         if let (Tool::Probe { centre, radius }, Some(probe)) = (self.tool, self.surface_probe.as_mut())
             && super::surface_probe::SurfaceProbe::covers(centre)
             && let Ok(force) = probe.update(centre, radius)
@@ -391,6 +401,7 @@ impl Simulation {
                     for c in 0..3 {
                         f_ext[c][node] += f[c];
                     }
+                    self.tool_loaded.mark(node);
                 }
             }
             self.tool_force = force;
@@ -425,6 +436,7 @@ impl Simulation {
         for c in 0..3 {
             f_ext[c][node] += pull[c];
         }
+        self.tool_loaded.mark(node);
         true
     }
 
@@ -480,14 +492,17 @@ impl Simulation {
             return;
         }
         let mut push = [0.0; 3];
-        let nn = self.rest[0].len();
-        // The force on every node before any is projected.
-        let computed = self.tissue.forces();
-        for c in 0..3 {
-            self.contact_forces[c].copy_from_slice(&computed[c]);
+        // The force on every node before any is projected, for the push on the probe; not needed
+        // where the probe's force comes from the material's surface compliance.
+        let reads_push = !self.probe_on_surface;
+        if reads_push {
+            let computed = self.tissue.forces();
+            for c in 0..3 {
+                self.contact_forces[c].copy_from_slice(&computed[c]);
+            }
         }
-        for p in 0..nn {
-            if self.tissue.free()[p] == 0.0 || !self.surface[p] {
+        for &p in &self.surface {
+            if self.tissue.free()[p] == 0.0 {
                 continue;
             }
             let x = self.tissue.x();
@@ -521,13 +536,13 @@ impl Simulation {
                 }
             }
             let fn_ = DVec3::from(f).dot(DVec3::from(n));
-            if fn_ < 0.0 {
+            if reads_push && fn_ < 0.0 {
                 for c in 0..3 {
                     push[c] += fn_ * n[c];
                 }
             }
         }
-        if !self.probe_on_surface {
+        if reads_push {
             self.tool_force = push;
         }
     }
@@ -538,6 +553,36 @@ impl Simulation {
         for (p, o) in out.iter_mut().enumerate() {
             *o = [x[0][p] as f32, x[1][p] as f32, x[2][p] as f32];
         }
+    }
+}
+
+/// A set of nodes, each listed once, that allocates nothing after it is made.
+#[derive(Debug)]
+struct MarkedNodes {
+    nodes: Vec<usize>,
+    marked: Vec<bool>,
+}
+
+impl MarkedNodes {
+    fn new(num_nodes: usize) -> Self {
+        Self { nodes: Vec::with_capacity(num_nodes), marked: vec![false; num_nodes] }
+    }
+
+    fn mark(&mut self, node: usize) {
+        if !std::mem::replace(&mut self.marked[node], true) {
+            self.nodes.push(node);
+        }
+    }
+
+    fn nodes(&self) -> &[usize] {
+        &self.nodes
+    }
+
+    fn clear(&mut self) {
+        for &p in &self.nodes {
+            self.marked[p] = false;
+        }
+        self.nodes.clear();
     }
 }
 
@@ -587,5 +632,33 @@ mod tests {
         let last = forces[forces.len() - 1];
         assert!(pull > 0.5 && (last + pull).abs() < 1e-3 * pull, "pull {pull} N, felt {last} N");
         assert!(forces.iter().all(|f| f.abs() <= 1.2 * DRAG_STIFFNESS * 0.01), "{forces:?}");
+    }
+
+    /// The probe's loads on the nodes (restored node by node, not copied whole each step) go
+    /// when it lifts: the loads are the case's again, bit for bit.
+    #[test]
+    fn the_probes_loads_go_when_it_lifts() {
+        let material = Material::object_a();
+        let grid = crate::mechanics::grid::Grid::new(6).expect("grid");
+        let tissue = Model::Lattice(crate::mechanics::msm::Topology::Hex).build_on(grid, &material, None, 0.2);
+        let case = LoadCase::bottom_clamp(&grid, "A");
+        let mut sim = Simulation::with_tissue(tissue.expect("hex"), Integrator::Symplectic, 1e-4, Some(&case));
+        let base = sim.tissue.f_ext_mut().clone();
+        let compliance =
+            crate::response::surface_compliance::SurfaceCompliance::compute(&material, 10, &mut |_| true).expect("c");
+        let surface = crate::sim::surface_probe::MaterialSurface {
+            compliance: std::sync::Arc::new(compliance),
+            modes: std::sync::Arc::new(crate::sim::modal_lag::ModalBasis::of_material(&material).expect("modes")),
+        };
+        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::on(&surface, grid, Some(0.2))));
+        for i in 0..20 {
+            let centre = [0.03 + 1e-3 * i as f64, 0.05, 0.1 + 0.015 - 0.003];
+            sim.tool = Tool::Probe { centre, radius: 0.015 };
+            sim.step().expect("step");
+            assert!(sim.tissue.f_ext_mut() != &base, "the probe loads the nodes under it");
+        }
+        sim.tool = Tool::None;
+        sim.step().expect("step");
+        assert!(sim.tissue.f_ext_mut() == &base, "the case's loads once the probe lifts");
     }
 }
