@@ -7,7 +7,7 @@
 //! - [`fem`]: hex8 statics and dynamics; [`msm`]: the mass-spring lattices, statics and dynamics.
 //! - [`parallel`]: the physics' own thread pool; [`anchor`]: a node held by a spring inside an
 //!   implicit step's solve; [`newton_krylov`]: the nonlinear models' implicit steps, Newton by
-//!   conjugate gradients on the rest factor.
+//!   conjugate gradients on the rest factor; [`kinetic`]: the kinetic energy of lumped masses.
 //!
 //! May use: [`crate::io`] only. Knows no simulation, calibration, GPU or command line.
 
@@ -16,6 +16,7 @@ pub mod cases;
 pub mod displacement_file;
 pub mod fem;
 pub mod grid;
+pub mod kinetic;
 pub mod material;
 pub mod msm;
 pub mod newton_krylov;

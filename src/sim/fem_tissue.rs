@@ -34,6 +34,8 @@ pub struct FemTissue {
     free_dofs: [Vec<f64>; 3],
     /// `1 / mass` of each node (its three dofs share it), 1/kg.
     inv_mass: Vec<f64>,
+    /// The mass of each node, kg.
+    node_mass: Vec<f64>,
     /// The explicit limits' `omega_max^2` ([`fem_stiffest`]), s^-2.
     omega_max_sq: f64,
     dt_limit: f64,
@@ -59,6 +61,7 @@ impl FemTissue {
             u: std::array::from_fn(|_| vec![0.0; nn]),
             free_dofs: split(&dynamics.free),
             inv_mass: (0..nn).map(|p| dynamics.inv_mass[3 * p]).collect(),
+            node_mass: (0..nn).map(|p| dynamics.mass[3 * p]).collect(),
             omega_max_sq,
             dt_limit: damped_explicit_limit(omega_max_sq.sqrt(), 0.0),
             total_mass: dynamics.mass.iter().sum::<f64>() / 3.0,
@@ -90,12 +93,7 @@ impl FemTissue {
             }
         }
         d.model.stencil().apply_components(&self.u, &mut self.forces);
-        for (ku, f_ext) in self.forces.iter_mut().zip(&self.f_ext) {
-            for (ku, f_ext) in ku.iter_mut().zip(f_ext) {
-                *ku = f_ext - *ku;
-            }
-        }
-        self.advance_symplectic(dt);
+        self.advance_symplectic::<true>(dt);
     }
 
     /// One symplectic Euler step of the corotational FEM on the component-wise state, the
@@ -104,16 +102,21 @@ impl FemTissue {
     pub fn step_corotational_symplectic(&mut self, dt: f64) {
         let x = [&self.x[0][..], &self.x[1][..], &self.x[2][..]];
         self.dynamics.corotated_forces_components(x, &self.f_ext, &mut self.forces);
-        self.advance_symplectic(dt);
+        self.advance_symplectic::<false>(dt);
     }
 
     /// `v = (v + dt (f m^-1 - alpha v)) free`, `x += dt v`, with the total force `f` in
-    /// `self.forces`.
-    fn advance_symplectic(&mut self, dt: f64) {
+    /// `self.forces`, or (`LINEAR`) `f = f_ext - K u` with `K u` there (in the same pass, which
+    /// then leaves the total force in `self.forces`).
+    fn advance_symplectic<const LINEAR: bool>(&mut self, dt: f64) {
         let alpha = self.dynamics.alpha;
         for c in 0..3 {
-            let (x, v, f, free) = (&mut self.x[c], &mut self.v[c], &self.forces[c], &self.free_dofs[c]);
+            let (x, v, f, free) = (&mut self.x[c], &mut self.v[c], &mut self.forces[c], &self.free_dofs[c]);
+            let f_ext = &self.f_ext[c];
             for p in 0..x.len() {
+                if LINEAR {
+                    f[p] = f_ext[p] - f[p];
+                }
                 let vel = (v[p] + dt * (f[p] * self.inv_mass[p] - alpha * v[p])) * free[p];
                 v[p] = vel;
                 x[p] += dt * vel;
@@ -238,10 +241,7 @@ impl Tissue for FemTissue {
         Ok(())
     }
     fn kinetic_energy(&self) -> f64 {
-        let m = &self.dynamics.mass;
-        0.5 * (0..self.free.len())
-            .map(|p| (0..3).map(|c| m[3 * p + c] * self.v[c][p] * self.v[c][p]).sum::<f64>())
-            .sum::<f64>()
+        crate::mechanics::kinetic::kinetic_energy(&self.node_mass, &self.v)
     }
     fn explicit_dt_limit(&self) -> f64 {
         self.dt_limit

@@ -469,10 +469,7 @@ impl Dynamics {
 
     /// Kinetic energy, joules.
     pub fn kinetic_energy(&self, model: &MsmModel) -> f64 {
-        let s: f64 = (0..self.free.len())
-            .map(|p| model.masses[p] * (0..3).map(|c| self.v[c][p] * self.v[c][p]).sum::<f64>())
-            .sum();
-        0.5 * s
+        crate::mechanics::kinetic::kinetic_energy(&model.masses, &self.v)
     }
 
     /// Displacements from the rest positions, row = node.
