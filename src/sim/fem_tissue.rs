@@ -184,7 +184,7 @@ impl Tissue for FemTissue {
         self.total_mass
     }
     fn node_mass(&self, p: usize) -> f64 {
-        self.dynamics.mass[3 * p]
+        self.node_mass[p]
     }
     fn x(&self) -> &[Vec<f64>; 3] {
         &self.x

@@ -511,7 +511,6 @@ impl Simulation {
             if dist >= radius {
                 continue;
             }
-            let f = [self.contact_forces[0][p], self.contact_forces[1][p], self.contact_forces[2][p]];
             // Moved onto the sphere along its normal at the step's start, not radially (SHAKE's
             // projection), and the velocity given the move over the step: a radial projection
             // scaled the node's slide over the sphere without a matching velocity, which fed
@@ -535,10 +534,13 @@ impl Simulation {
                     v[c][p] -= vn * n[c];
                 }
             }
-            let fn_ = DVec3::from(f).dot(DVec3::from(n));
-            if reads_push && fn_ < 0.0 {
-                for c in 0..3 {
-                    push[c] += fn_ * n[c];
+            if reads_push {
+                let f = DVec3::from(std::array::from_fn(|c| self.contact_forces[c][p]));
+                let fn_ = f.dot(DVec3::from(n));
+                if fn_ < 0.0 {
+                    for c in 0..3 {
+                        push[c] += fn_ * n[c];
+                    }
                 }
             }
         }
