@@ -1,9 +1,9 @@
 // One symplectic Euler step of a spring lattice or of the linear FEM, in f32 (tissue-sim's
 // `gpu::explicit`). The state is the displacement from rest `u = x - X` and the velocity `v`,
-// component-major: `state[c nn + p]` is u, `state[3 nn + c nn + p]` is v. A step is two
-// dispatches: `*_velocity` (one thread a node) computes the node's force from `u` and writes
-// `v' = (v + dt ((f + f_ext) / m - c v)) free`; `advance_positions` (one thread a component)
-// writes `u' = u + dt v'`.
+// component-major: `state[c nn + p]` is u, `state[3 nn + c nn + p]` is v. A step is one
+// dispatch, `*_step` (one thread a node), from `state` into `next` (the two buffers swap
+// roles each step): it computes the node's force from `u` and writes
+// `v' = (v + dt ((f + f_ext) / m - c v)) free` and `u' = u + dt v'`.
 
 struct Family {
     // Linear node offset of a pair `(p, p + offset)`; pairs exist for `p < len`.
@@ -25,12 +25,14 @@ struct Params {
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read_write> state: array<f32>;
+@group(0) @binding(1) var<storage, read> state: array<f32>;
 @group(0) @binding(2) var<storage, read> f_ext: array<f32>;
 // `1 / m` of each node, then `c / m` of each node, then free (1 or 0) per component.
 @group(0) @binding(3) var<storage, read> coef: array<f32>;
 // The lattice's stiffness per family and pair, or the FEM's stencil (27 classes x 27 blocks x 9).
 @group(0) @binding(4) var<storage, read> op: array<f32>;
+// The state after the step.
+@group(0) @binding(5) var<storage, read_write> next: array<f32>;
 
 fn displacement(p: u32) -> vec3<f32> {
     let nn = params.nn;
@@ -45,7 +47,7 @@ fn pair_force(fam: Family, p: u32) -> vec3<f32> {
     return (k - k * fam.rest_length / l) * d;
 }
 
-fn update_velocity(q: u32, force: vec3<f32>) {
+fn advance(q: u32, force: vec3<f32>) {
     let nn = params.nn;
     let dt = params.dt;
     let inv_m = coef[q];
@@ -54,12 +56,13 @@ fn update_velocity(q: u32, force: vec3<f32>) {
         let i = c * nn + q;
         let v = state[3u * nn + i];
         let vn = (v + dt * (inv_m * (force[c] + f_ext[i]) - rate * v)) * coef[2u * nn + i];
-        state[3u * nn + i] = vn;
+        next[3u * nn + i] = vn;
+        next[i] = state[i] + dt * vn;
     }
 }
 
 @compute @workgroup_size(64)
-fn lattice_velocity(@builtin(global_invocation_id) id: vec3<u32>) {
+fn lattice_step(@builtin(global_invocation_id) id: vec3<u32>) {
     let q = id.x;
     if q >= params.nn {
         return;
@@ -74,7 +77,7 @@ fn lattice_velocity(@builtin(global_invocation_id) id: vec3<u32>) {
             f -= pair_force(fam, q - fam.offset);
         }
     }
-    update_velocity(q, f);
+    advance(q, f);
 }
 
 // 0 on the low face, 2 on the high one, 1 inside.
@@ -89,7 +92,7 @@ fn side(i: u32, n: u32) -> u32 {
 }
 
 @compute @workgroup_size(64)
-fn stencil_velocity(@builtin(global_invocation_id) id: vec3<u32>) {
+fn stencil_step(@builtin(global_invocation_id) id: vec3<u32>) {
     let q = id.x;
     let n = params.n;
     if q >= params.nn {
@@ -112,15 +115,5 @@ fn stencil_velocity(@builtin(global_invocation_id) id: vec3<u32>) {
             op[b + 6u] * u.x + op[b + 7u] * u.y + op[b + 8u] * u.z,
         );
     }
-    update_velocity(q, -ku);
-}
-
-@compute @workgroup_size(64)
-fn advance_positions(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    let nn = params.nn;
-    if i >= 3u * nn {
-        return;
-    }
-    state[i] += params.dt * state[3u * nn + i];
+    advance(q, -ku);
 }

@@ -334,8 +334,8 @@ fn bad_input_gets_one_clear_line_and_exit_code_1() {
         (vec!["fem", "--material", &missing_s, "--out", o], "No such file"),
         (vec!["fem", "--object", "A", "--nodes", "40", "--bc", "patch", "--out", o], "at most"),
         (
-            vec!["msm", "--object", "A", "--nodes", "41", "--k1", "1", "--k2", "1", "--k3", "1", "--out", o],
-            "at most 40",
+            vec!["msm", "--object", "A", "--nodes", "65", "--k1", "1", "--k2", "1", "--k3", "1", "--out", o],
+            "at most 64",
         ),
         (vec!["errors", "--params", &pb], "k3 must equal k2"),
         (vec!["errors", "--params", &px], "k4"),
@@ -363,6 +363,11 @@ fn bad_input_gets_one_clear_line_and_exit_code_1() {
     let msg = stderr(&r);
     assert!(msg.contains("no GPU adapter that computes") && msg.trim_end().lines().count() == 1, "{msg}");
     assert!(!out.exists());
+    // The same for `bench --gpu`, before any work.
+    let r = run_env(&["bench", "--gpu", "--json"], &[("WGPU_BACKEND", "dx12")], &[]);
+    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    let msg = stderr(&r);
+    assert!(msg.contains("no GPU adapter that computes") && msg.trim_end().lines().count() == 1, "{msg}");
     // A window system that does not answer: say so, name the headless commands, no source paths.
     let r = run_env(&["view", "--frames", "1"], &[("DISPLAY", ":97")], &["WAYLAND_DISPLAY"]);
     assert_eq!(r.status.code(), Some(1));

@@ -30,7 +30,7 @@ pub struct ComputeDevice {
 
 impl ComputeDevice {
     /// Opens the default adapter (backends from `WGPU_BACKEND`, else all), high performance
-    /// first, with the largest storage buffers it allows.
+    /// first, with the largest and the most storage buffers it allows.
     pub fn open() -> Result<Self, GpuError> {
         let adapter = default_adapter().map_err(GpuError::NoAdapter)?;
         let info = adapter.get_info();
@@ -41,6 +41,8 @@ impl ComputeDevice {
         let required_limits = wgpu::Limits {
             max_storage_buffer_binding_size: supported.max_storage_buffer_binding_size,
             max_buffer_size: supported.max_buffer_size,
+            // The step binds five (the state before and after it, load, coefficients, operator).
+            max_storage_buffers_per_shader_stage: supported.max_storage_buffers_per_shader_stage,
             ..wgpu::Limits::downlevel_defaults()
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

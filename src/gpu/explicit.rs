@@ -46,13 +46,15 @@ pub struct ExplicitKernel {
     nn: usize,
     params: ParamsGpu,
     params_buffer: wgpu::Buffer,
-    state: wgpu::Buffer,
+    /// The state before and after a step; `state[current]` holds it between steps.
+    state: [wgpu::Buffer; 2],
+    current: usize,
     f_ext: wgpu::Buffer,
     coef: wgpu::Buffer,
     staging: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
-    velocity: wgpu::ComputePipeline,
-    advance: wgpu::ComputePipeline,
+    /// Group `i` steps `state[i]` into `state[1 - i]`.
+    bind_groups: [wgpu::BindGroup; 2],
+    step: wgpu::ComputePipeline,
     /// Host copies: the state (`u` then `v`, component-major) and the load.
     host_state: Vec<f32>,
     host_load: Vec<f32>,
@@ -117,11 +119,8 @@ fn operator(form: &ExplicitForm) -> Result<(ParamsGpu, Vec<f32>), GpuError> {
     Ok((params, op))
 }
 
-/// The bind group layout and the two pipelines of a force form.
-fn pipelines(
-    device: &wgpu::Device,
-    force: &ForceForm,
-) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline, wgpu::ComputePipeline) {
+/// The bind group layout and the step's pipeline of a force form.
+fn pipeline(device: &wgpu::Device, force: &ForceForm) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline) {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("explicit_step.wgsl"),
         source: wgpu::ShaderSource::Wgsl(std::borrow::Cow::Borrowed(EXPLICIT_STEP_WGSL)),
@@ -137,10 +136,11 @@ fn pipelines(
         label: Some("explicit step"),
         entries: &[
             entry(0, wgpu::BufferBindingType::Uniform),
-            entry(1, wgpu::BufferBindingType::Storage { read_only: false }),
+            entry(1, read),
             entry(2, read),
             entry(3, read),
             entry(4, read),
+            entry(5, wgpu::BufferBindingType::Storage { read_only: false }),
         ],
     });
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -148,22 +148,19 @@ fn pipelines(
         bind_group_layouts: &[Some(&layout)],
         immediate_size: 0,
     });
-    let pipeline = |entry: &str| {
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        })
+    let entry = match force {
+        ForceForm::Springs(_) => "lattice_step",
+        ForceForm::Stencil(_) => "stencil_step",
     };
-    let velocity = pipeline(match force {
-        ForceForm::Springs(_) => "lattice_velocity",
-        ForceForm::Stencil(_) => "stencil_velocity",
+    let step = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(&pipeline_layout),
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
     });
-    let advance = pipeline("advance_positions");
-    (layout, velocity, advance)
+    (layout, step)
 }
 
 impl ExplicitKernel {
@@ -179,7 +176,7 @@ impl ExplicitKernel {
 
     fn build(gpu: &ComputeDevice, form: &ExplicitForm) -> Result<Self, GpuError> {
         let nn = form.grid.num_nodes();
-        if groups(3 * nn) > MAX_GROUPS {
+        if groups(nn) > MAX_GROUPS {
             return Err(GpuError::Unsupported(format!("{nn} nodes are more than one GPU dispatch covers")));
         }
         let device = &gpu.device;
@@ -195,7 +192,9 @@ impl ExplicitKernel {
         });
         let host_state = vec![0.0f32; 6 * nn];
         let host_load = vec![0.0f32; 3 * nn];
-        let state = storage(device, "state", &host_state, wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC);
+        let state = [0, 1].map(|_| {
+            storage(device, "state", &host_state, wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC)
+        });
         let f_ext = storage(device, "f_ext", &host_load, wgpu::BufferUsages::COPY_DST);
         let coef = storage(device, "coefficients", &coefficients(form), wgpu::BufferUsages::COPY_DST);
         // A zero-length binding is not allowed: keep one element.
@@ -206,17 +205,20 @@ impl ExplicitKernel {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let (layout, velocity, advance) = pipelines(device, &form.force);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("explicit step"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: params_buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: state.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: f_ext.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: coef.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: op.as_entire_binding() },
-            ],
+        let (layout, step) = pipeline(device, &form.force);
+        let bind_groups = [0, 1].map(|i| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("explicit step"),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: params_buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: state[i].as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: f_ext.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 3, resource: coef.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 4, resource: op.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 5, resource: state[1 - i].as_entire_binding() },
+                ],
+            })
         });
         Ok(Self {
             gpu: gpu.clone(),
@@ -224,12 +226,12 @@ impl ExplicitKernel {
             params,
             params_buffer,
             state,
+            current: 0,
             f_ext,
             coef,
             staging,
-            bind_group,
-            velocity,
-            advance,
+            bind_groups,
+            step,
             host_state,
             host_load,
             mapped: Default::default(),
@@ -245,7 +247,7 @@ impl ExplicitKernel {
                 self.host_state[3 * nn + c * nn + p] = v[c][p] as f32;
             }
         }
-        self.gpu.queue.write_buffer(&self.state, 0, bytemuck::cast_slice(&self.host_state));
+        self.gpu.queue.write_buffer(&self.state[self.current], 0, bytemuck::cast_slice(&self.host_state));
     }
 
     /// Writes the external forces, newtons.
@@ -274,12 +276,11 @@ impl ExplicitKernel {
         {
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None });
-            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_pipeline(&self.step);
             for _ in 0..steps {
-                pass.set_pipeline(&self.velocity);
+                pass.set_bind_group(0, &self.bind_groups[self.current], &[]);
                 pass.dispatch_workgroups(groups(self.nn), 1, 1);
-                pass.set_pipeline(&self.advance);
-                pass.dispatch_workgroups(groups(3 * self.nn), 1, 1);
+                self.current = 1 - self.current;
             }
         }
         self.gpu.queue.submit([encoder.finish()]);
@@ -296,7 +297,7 @@ impl ExplicitKernel {
         use std::sync::atomic::Ordering;
         let bytes = (4 * self.host_state.len()) as u64;
         let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        encoder.copy_buffer_to_buffer(&self.state, 0, &self.staging, 0, bytes);
+        encoder.copy_buffer_to_buffer(&self.state[self.current], 0, &self.staging, 0, bytes);
         self.gpu.queue.submit([encoder.finish()]);
         let slice = self.staging.slice(..);
         self.mapped.store(0, Ordering::Release);

@@ -22,6 +22,9 @@ pub struct GpuTissue {
     rest: [Vec<f64>; 3],
     /// Whether the CPU's state changed since the GPU last had it.
     stale: bool,
+    /// Whether the load may have changed since the GPU last had it (it is sent only then:
+    /// 3 MB at 64^3).
+    load_stale: bool,
 }
 
 impl GpuTissue {
@@ -31,7 +34,7 @@ impl GpuTissue {
         let kernel = ExplicitKernel::new(gpu, &form)?;
         let grid = inner.grid();
         let rest = std::array::from_fn(|c| (0..grid.num_nodes()).map(|p| grid.position(p)[c]).collect());
-        Ok(Self { inner, gpu: gpu.clone(), kernel, rest, stale: true })
+        Ok(Self { inner, gpu: gpu.clone(), kernel, rest, stale: true, load_stale: true })
     }
 
     /// The adapter the steps run on, in words.
@@ -58,13 +61,17 @@ impl GpuTissue {
             self.kernel.write_state(&self.rest, self.inner.x(), self.inner.v());
             self.stale = false;
         }
-        self.kernel.write_load(self.inner.f_ext_mut());
+        if self.load_stale {
+            self.kernel.write_load(self.inner.f_ext_mut());
+            self.load_stale = false;
+        }
     }
 
     fn rebuild(&mut self) -> Result<(), String> {
         let form = self.inner.explicit_form()?;
         self.kernel = ExplicitKernel::new(&self.gpu, &form).map_err(|e| e.to_string())?;
         self.stale = true;
+        self.load_stale = true;
         Ok(())
     }
 }
@@ -98,6 +105,7 @@ impl Tissue for GpuTissue {
         self.inner.x_v_mut()
     }
     fn f_ext_mut(&mut self) -> &mut [Vec<f64>; 3] {
+        self.load_stale = true;
         self.inner.f_ext_mut()
     }
     fn free(&self) -> &[f64] {
@@ -128,6 +136,7 @@ impl Tissue for GpuTissue {
             self.kernel.write_free(&form);
         }
         self.stale = true;
+        self.load_stale = true;
     }
     fn params(&self) -> Option<MsmParams> {
         self.inner.params()

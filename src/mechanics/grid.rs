@@ -23,9 +23,10 @@ pub enum GridError {
     },
 }
 
-/// Largest supported number of nodes per axis.
-/// (The FEM's sparse Cholesky needs about 1.5 GB at 32^3 and grows like n^6.)
-pub const MAX_NODES_PER_AXIS: usize = 40;
+/// Largest supported number of nodes per axis: the GPU's explicit step runs at 64^3. (The FEM's
+/// sparse Cholesky needs about 1.5 GB at 32^3 and grows like n^6: solves refuse a factor over
+/// [`crate::mechanics::sparse::MAX_FACTOR_BYTES`] before any work.)
+pub const MAX_NODES_PER_AXIS: usize = 64;
 
 /// An `n x n x n` node cube of side [`CUBE_SIDE_M`].
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -385,18 +385,22 @@ impl Simulation {
         }
         self.probe_on_surface = false;
         let carries = self.tissue.carries_contact_loads();
-        let f_ext = self.tissue.f_ext_mut();
-        for &p in self.tool_loaded.nodes() {
-            for c in 0..3 {
-                f_ext[c][p] = self.base_load[c][p];
+        // The load is taken only where it changes (a GPU step sends it again when taken).
+        if !self.tool_loaded.nodes().is_empty() {
+            let f_ext = self.tissue.f_ext_mut();
+            for &p in self.tool_loaded.nodes() {
+                for c in 0..3 {
+                    f_ext[c][p] = self.base_load[c][p];
+                }
             }
+            self.tool_loaded.clear();
         }
-        self.tool_loaded.clear();
         if let (Tool::Probe { centre, radius }, Some(probe)) = (self.tool, self.surface_probe.as_mut())
             && super::surface_probe::SurfaceProbe::covers(centre)
             && let Ok(force) = probe.update(centre, radius)
         {
             if carries {
+                let f_ext = self.tissue.f_ext_mut();
                 for &(node, f) in probe.loads() {
                     for c in 0..3 {
                         f_ext[c][node] += f[c];

@@ -1,8 +1,8 @@
 //! `bench`'s resolution sweep: the viewer's 1 ms tick with the probe pressed, for every model x
 //! resolution x integrator, each integrator at the fewest substeps that keep it stable and inside
 //! the dynamic budget ([`crate::sim::fewest_substeps`]), and which of them the automatic choice
-//! takes; the largest resolution each model runs at 1 kHz; and the GPU's own step where an
-//! adapter computes.
+//! takes; the largest resolution each model runs at 1 kHz; and the GPU's figures where an
+//! adapter computes ([`super::bench_gpu`]).
 //!
 //! The scene is the viewer's: object A held by its bottom face, the lattice's shipped tissue
 //! carried to the grid, damping ratio 0.2, and the 15 mm probe pressed 4 mm into the top face
@@ -16,8 +16,7 @@ use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::sim::surface_probe::{MaterialSurface, SurfaceProbe};
-use crate::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, Tissue as _, Tool};
-use crate::study::timing::time_per_call;
+use crate::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, Tool};
 
 /// The resolutions swept, nodes per edge.
 pub const SWEEP_NODES: [usize; 5] = [8, 12, 16, 24, 32];
@@ -64,10 +63,10 @@ pub struct Sweep {
     /// The largest resolution swept at which each model's automatic choice on the CPU ticks in
     /// under 1 ms (runs at 1 kHz), by model (`None`: not even 8^3).
     pub largest_1khz_nodes: BTreeMap<String, Option<usize>>,
-    /// The GPU's adapter, or why there is none.
-    pub gpu_adapter: String,
-    /// One GPU step alone (100 steps in one submission, no readback), by `model/nodes`, s.
-    pub gpu_step_s: BTreeMap<String, f64>,
+    /// The GPU's step alone and its 1 ms tick at scale against the CPU's
+    /// ([`super::bench_gpu`]).
+    #[serde(flatten)]
+    pub gpu: super::bench_gpu::GpuBench,
 }
 
 /// The viewer's scene on `grid` for `model`, with the material's surface compliance.
@@ -179,45 +178,6 @@ pub fn sweep_model(
     Ok(())
 }
 
-/// The GPU's step alone for the hex lattice and the linear FEM at 16^3 to 40^3 (the largest grid).
-fn gpu_steps() -> anyhow::Result<BTreeMap<String, f64>> {
-    let mut out = BTreeMap::new();
-    let material = Material::object_a();
-    let gpu = crate::gpu::ComputeDevice::open()?;
-    for model in [
-        Model::Lattice(crate::mechanics::msm::Topology::Hex),
-        Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear),
-    ] {
-        for nodes in [16, 32, crate::mechanics::grid::MAX_NODES_PER_AXIS] {
-            let grid = Grid::new(nodes)?;
-            // Undamped: the fundamental a damping ratio needs is too large to solve at 64^3.
-            let tissue: Box<dyn crate::sim::Tissue> = match model {
-                Model::Lattice(t) => {
-                    let params = crate::sim::shipped::msm_params_at(&material, t, &grid)?;
-                    let lattice = crate::mechanics::msm::MsmModel::new(grid, params, material.density)?;
-                    Box::new(crate::sim::MsmTissue::new(lattice, material.density))
-                }
-                Model::Fem(f) => Box::new(crate::sim::FemTissue::new(grid, &material, f)),
-            };
-            let dt = 0.5 * tissue.explicit_dt_limit();
-            let mut tissue = crate::gpu::GpuTissue::new(&gpu, tissue)?;
-            tissue.apply_case(&LoadCase::bottom_clamp(&grid, "A"));
-            let steps = 100;
-            let mut failed = None;
-            let t = time_per_call(0.3, || {
-                if let Err(e) = tissue.run_unsynchronised(dt, steps) {
-                    failed.get_or_insert(e);
-                }
-            });
-            if let Some(e) = failed {
-                anyhow::bail!("GPU step of {} at {nodes}^3: {e}", model.name());
-            }
-            out.insert(format!("{}/{nodes}", model.name()), t / steps as f64);
-        }
-    }
-    Ok(out)
-}
-
 /// Runs the sweep (minutes: the 32^3 factorisations and corotational steps dominate).
 pub fn run() -> anyhow::Result<Sweep> {
     let surface =
@@ -265,11 +225,11 @@ pub fn run() -> anyhow::Result<Sweep> {
             .max();
         largest_1khz_nodes.insert(model.name(), fast);
     }
-    let (gpu_adapter, gpu_step_s) = match &gpu {
-        Ok(g) => (g.describe(), gpu_steps()?),
-        Err(e) => (e.to_string(), BTreeMap::new()),
+    let gpu = match &gpu {
+        Ok(g) => super::bench_gpu::measure(g)?,
+        Err(e) => super::bench_gpu::unavailable(e),
     };
-    Ok(Sweep { ticks, largest_1khz_nodes, gpu_adapter, gpu_step_s })
+    Ok(Sweep { ticks, largest_1khz_nodes, gpu })
 }
 
 impl Sweep {
@@ -299,10 +259,6 @@ impl Sweep {
         for (m, n) in &self.largest_1khz_nodes {
             s += &format!("  {m:<17} {}\n", n.map_or("below 8^3".into(), |n| format!("{n}^3")));
         }
-        s += &format!("GPU: {}\n", self.gpu_adapter);
-        for (k, t) in &self.gpu_step_s {
-            s += &format!("  GPU step alone {k:<22} {:10.1} us\n", t * 1e6);
-        }
-        s
+        s + &self.gpu.to_text()
     }
 }

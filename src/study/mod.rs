@@ -8,6 +8,7 @@
 //! May use: calibrate, validate, gpu, sim, response, mechanics, io.
 
 pub mod bench;
+pub mod bench_gpu;
 pub mod bench_sweep;
 pub mod chart;
 pub mod chart_measure;
