@@ -41,7 +41,7 @@ impl ComputeDevice {
         let required_limits = wgpu::Limits {
             max_storage_buffer_binding_size: supported.max_storage_buffer_binding_size,
             max_buffer_size: supported.max_buffer_size,
-            // The step binds five (the state before and after it, load, coefficients, operator).
+            // The step binds `explicit::STORAGE_BUFFERS`.
             max_storage_buffers_per_shader_stage: supported.max_storage_buffers_per_shader_stage,
             ..wgpu::Limits::downlevel_defaults()
         };

@@ -16,6 +16,9 @@ pub const EXPLICIT_STEP_WGSL: &str = include_str!("../../shaders/explicit_step.w
 const WORKGROUP: u32 = 64;
 /// Spring families a lattice may have (the hex lattice has 13).
 const MAX_FAMILIES: usize = 16;
+/// Storage buffers the step binds: the state before and after it, the load, the coefficients
+/// and the operator.
+pub const STORAGE_BUFFERS: u32 = 5;
 /// Workgroups one dispatch may have along x (WebGPU's minimum limit).
 const MAX_GROUPS: u32 = 65_535;
 
@@ -180,6 +183,12 @@ impl ExplicitKernel {
             return Err(GpuError::Unsupported(format!("{nn} nodes are more than one GPU dispatch covers")));
         }
         let device = &gpu.device;
+        let bindable = device.limits().max_storage_buffers_per_shader_stage;
+        if bindable < STORAGE_BUFFERS {
+            return Err(GpuError::Unsupported(format!(
+                "this GPU binds {bindable} storage buffers in a compute shader; the step needs {STORAGE_BUFFERS}"
+            )));
+        }
         let (params, op) = operator(form)?;
         let limit = device.limits().max_storage_buffer_binding_size as usize;
         if 4 * op.len().max(6 * nn) > limit {

@@ -25,7 +25,8 @@ pub enum GridError {
 
 /// Largest supported number of nodes per axis: the GPU's explicit step runs at 64^3. (The FEM's
 /// sparse Cholesky needs about 1.5 GB at 32^3 and grows like n^6: solves refuse a factor over
-/// [`crate::mechanics::sparse::MAX_FACTOR_BYTES`] before any work.)
+/// [`crate::mechanics::sparse::MAX_FACTOR_BYTES`] after its symbolic analysis, before the
+/// numeric factorisation; some solvers have their own smaller grid limits.)
 pub const MAX_NODES_PER_AXIS: usize = 64;
 
 /// An `n x n x n` node cube of side [`CUBE_SIDE_M`].

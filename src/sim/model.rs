@@ -76,7 +76,22 @@ impl Model {
         params: Option<MsmParams>,
         zeta: f64,
     ) -> anyhow::Result<Box<dyn Tissue>> {
-        let mut tissue: Box<dyn Tissue> = match self {
+        let mut tissue = self.build_undamped_on(grid, material, params)?;
+        if self.takes_damping_ratio() {
+            tissue.set_damping_ratio(zeta).map_err(|e| anyhow::anyhow!("{e}"))?;
+        }
+        Ok(tissue)
+    }
+
+    /// [`Model::build_on`] without the damping ratio (a lattice keeps its parameters' nodal
+    /// `d`, the FEM is undamped): no fundamental is solved for, so it builds at any grid.
+    pub fn build_undamped_on(
+        self,
+        grid: crate::mechanics::grid::Grid,
+        material: &Material,
+        params: Option<MsmParams>,
+    ) -> anyhow::Result<Box<dyn Tissue>> {
+        Ok(match self {
             Model::Lattice(t) => {
                 let p = match params {
                     Some(p) => p,
@@ -85,11 +100,7 @@ impl Model {
                 Box::new(MsmTissue::new(MsmModel::new(grid, p, material.density)?, material.density))
             }
             Model::Fem(f) => Box::new(FemTissue::new(grid, material, f)),
-        };
-        if self.takes_damping_ratio() {
-            tissue.set_damping_ratio(zeta).map_err(|e| anyhow::anyhow!("{e}"))?;
-        }
-        Ok(tissue)
+        })
     }
 
     /// Whether the model is damped by a ratio (all but the paper's axis lattice, which keeps its

@@ -12,12 +12,10 @@ use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Tissue};
-use crate::study::timing::{time_fallible, time_per_call};
+use crate::study::timing::{VIEWER_TICK_S as TICK_S, time_fallible};
 
-/// The resolutions timed on the GPU, nodes per edge.
-pub const GPU_NODES: [usize; 3] = [16, 32, 64];
-/// The viewer's tick, s.
-const TICK_S: f64 = 1e-3;
+/// The resolutions timed on the GPU, nodes per edge (up to the largest grid).
+pub const GPU_NODES: [usize; 3] = [16, 32, crate::mechanics::grid::MAX_NODES_PER_AXIS];
 /// Ticks run on both before their states are compared.
 const DRIFT_TICKS: usize = 20;
 /// The pull on the top face, N.
@@ -32,11 +30,11 @@ pub struct GpuScale {
     pub nodes: usize,
     /// Symplectic substeps of the 1 ms tick (the automatic choice's for the undamped tissue).
     pub substeps: usize,
-    /// One tick on the GPU: the load sent, the substeps in one submission, waited for, no
-    /// readback, s.
+    /// One tick on the GPU under a held load (sent once, before): the substeps in one
+    /// submission, waited for, no readback, s.
     pub gpu_tick_s: f64,
-    /// The same and the whole state read back into the CPU's f64 model, as `GpuTissue` steps
-    /// today (it reads back after each substep), s.
+    /// The same and the whole state read back into the CPU's f64 model once (`GpuTissue`'s
+    /// steps in the viewer and in `simulate` read it back after every substep), s.
     pub gpu_tick_readback_s: f64,
     /// The same tick on the CPU, f64, on the physics pool (`cpu_threads` threads), s.
     pub cpu_tick_s: f64,
@@ -70,15 +68,7 @@ fn models() -> [Model; 2] {
 
 /// `model` of object A on `grid`, undamped, under the pull.
 fn tissue(model: Model, grid: Grid) -> anyhow::Result<Box<dyn Tissue>> {
-    let material = Material::object_a();
-    let mut tissue: Box<dyn Tissue> = match model {
-        Model::Lattice(t) => {
-            let params = crate::sim::shipped::msm_params_at(&material, t, &grid)?;
-            let lattice = crate::mechanics::msm::MsmModel::new(grid, params, material.density)?;
-            Box::new(crate::sim::MsmTissue::new(lattice, material.density))
-        }
-        Model::Fem(f) => Box::new(crate::sim::FemTissue::new(grid, &material, f)),
-    };
+    let mut tissue = model.build_undamped_on(grid, &Material::object_a(), None)?;
     tissue.apply_case(&LoadCase::clamped(&grid, "A", 3, PULL_N));
     Ok(tissue)
 }
@@ -141,17 +131,7 @@ fn scale(gpu: &ComputeDevice, model: Model, grid: Grid) -> Result<GpuScale, Stri
         on_gpu.run_unsynchronised(dt, substeps)?;
         on_gpu.read_back()
     })?;
-    let mut failed = None;
-    let cpu_tick_s = crate::mechanics::parallel::on_pool(|| {
-        time_per_call(0.3, || {
-            if let Err(e) = cpu_tick(&mut cpu) {
-                failed.get_or_insert(e);
-            }
-        })
-    });
-    if let Some(e) = failed {
-        return Err(e);
-    }
+    let cpu_tick_s = crate::mechanics::parallel::on_pool(|| time_fallible(0.3, || cpu_tick(&mut cpu)))?;
     Ok(GpuScale {
         model: model.name(),
         nodes: grid.n(),

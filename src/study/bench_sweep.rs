@@ -17,13 +17,12 @@ use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::sim::surface_probe::{MaterialSurface, SurfaceProbe};
 use crate::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, Tool};
+use crate::study::timing::VIEWER_TICK_S as TICK_S;
 
 /// The resolutions swept, nodes per edge.
 pub const SWEEP_NODES: [usize; 5] = [8, 12, 16, 24, 32];
 /// The integrators swept (the full-tangent implicit step, a factorisation per step, is left out).
 pub const SWEEP_INTEGRATORS: [Integrator; 3] = [Integrator::Symplectic, Integrator::Prefactored, Integrator::Newmark];
-/// The viewer's tick, s.
-const TICK_S: f64 = 1e-3;
 /// How deep the probe presses, m.
 const PROBE_DEPTH_M: f64 = 0.004;
 
