@@ -116,11 +116,10 @@ fn scale(gpu: &ComputeDevice, model: Model, grid: Grid) -> Result<GpuScale, Stri
         on_gpu.run_unsynchronised(dt, substeps)?;
     }
     on_gpu.read_back()?;
-    let rest = Grid::position;
+    let (a, b) = (on_gpu.x(), cpu.x());
     let (mut gap, mut largest) = (0.0_f64, 0.0_f64);
     for p in 0..grid.num_nodes() {
-        let x0 = rest(&grid, p);
-        let (a, b) = (on_gpu.x(), cpu.x());
+        let x0 = grid.position(p);
         let d = (0..3).map(|c| (a[c][p] - b[c][p]).powi(2)).sum::<f64>().sqrt();
         let u = (0..3).map(|c| (b[c][p] - x0[c]).powi(2)).sum::<f64>().sqrt();
         gap = gap.max(d);
