@@ -4,6 +4,7 @@
 // dispatch, `*_step` (one thread a node), from `state` into `next` (the two buffers swap
 // roles each step): it computes the node's force from `u` and writes
 // `v' = (v + dt ((f + f_ext) / m - c v)) free` and `u' = u + dt v'`.
+// Once a tick, `guard_figures` sums what the CPU's guard needs from the state into a few bytes.
 
 struct Family {
     // Linear node offset of a pair `(p, p + offset)`; pairs exist for `p < len`.
@@ -116,4 +117,43 @@ fn stencil_step(@builtin(global_invocation_id) id: vec3<u32>) {
         );
     }
     advance(q, -ku);
+}
+
+var<workgroup> part: array<vec2<f32>, 64>;
+
+// The guard's figures of the state in `state` (run once a tick, not every step): for each
+// workgroup of nodes, the sum of their kinetic energies (NaN where a velocity is) and their
+// largest displacement component, written after the state in `next` (two values a workgroup;
+// the next step overwrites only the state before them).
+@compute @workgroup_size(64)
+fn guard_figures(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+    @builtin(workgroup_id) group: vec3<u32>,
+) {
+    let q = id.x;
+    let nn = params.nn;
+    var health = vec2<f32>(0.0);
+    if q < nn {
+        let m = 1.0 / coef[q];
+        for (var c = 0u; c < 3u; c++) {
+            let v = state[3u * nn + c * nn + q];
+            health = vec2<f32>(health.x + 0.5 * m * v * v, max(health.y, abs(state[c * nn + q])));
+        }
+    }
+    part[local] = health;
+    workgroupBarrier();
+    for (var s = 32u; s > 0u; s >>= 1u) {
+        if local < s {
+            let a = part[local];
+            let b = part[local + s];
+            part[local] = vec2<f32>(a.x + b.x, max(a.y, b.y));
+        }
+        workgroupBarrier();
+    }
+    if local == 0u {
+        let at = 6u * nn + 2u * group.x;
+        next[at] = part[0].x;
+        next[at + 1u] = part[0].y;
+    }
 }

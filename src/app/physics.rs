@@ -13,7 +13,7 @@ use crate::mechanics::msm::MsmParams;
 use crate::sim::{Integrator, Simulation, Tissue, Tool};
 
 /// Wall-clock length of one physics tick.
-pub const TICK: Duration = Duration::from_millis(1);
+pub const TICK: Duration = Duration::from_millis(crate::sim::TICK_MS);
 
 /// Builds a tissue model (on the physics thread).
 pub type TissueRecipe = Box<dyn FnOnce() -> Result<Box<dyn Tissue>, String> + Send>;
@@ -225,6 +225,10 @@ struct Glide {
     duration: Duration,
 }
 
+/// A state that stays on the GPU between steps is brought back to draw at most this often
+/// (about 60 Hz), not every tick.
+const DRAW_PERIOD: Duration = Duration::from_millis(16);
+
 /// The longest glide: after a pause, the next sample is reached within this.
 const MAX_GLIDE: Duration = Duration::from_millis(50);
 
@@ -238,6 +242,19 @@ impl Glide {
 }
 
 impl Loop {
+    /// Brings a state that stays on the GPU back to draw, at most every [`DRAW_PERIOD`] (last at
+    /// `drawn_at`); a failed readback pauses the loop.
+    fn bring_back_to_draw(&mut self, sim: &mut Simulation, drawn_at: &mut Option<Instant>) {
+        if !sim.tissue.state_on_device() || drawn_at.is_some_and(|t| t.elapsed() < DRAW_PERIOD) {
+            return;
+        }
+        if let Err(e) = sim.sync() {
+            self.message = Some(format!("t = {:.3} s: {e} Paused: Reset to go on.", sim.time_s));
+            self.paused = true;
+        }
+        *drawn_at = Some(Instant::now());
+    }
+
     /// The probe of the running simulation on the kept surface compliance, if any.
     fn attach_surface_probe(&self, sim: &mut Simulation) {
         let probe = self
@@ -356,6 +373,7 @@ fn run(
     let (mut window_start, mut ticks, mut steps, mut busy) = (Instant::now(), 0u64, 0u64, Duration::ZERO);
     let mut rates = Rates::default();
     let (mut ticks_total, mut steps_total) = (0u64, 0u64);
+    let mut drawn_at: Option<Instant> = None;
     while !ctx.cancelled() {
         loop {
             match rx.try_recv() {
@@ -396,6 +414,7 @@ fn run(
         if state.paused {
             state.owed = 0.0;
         }
+        state.bring_back_to_draw(&mut sim, &mut drawn_at);
         busy += t0.elapsed();
         ticks += 1;
         ticks_total += 1;

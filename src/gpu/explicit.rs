@@ -1,5 +1,6 @@
 //! The explicit step's kernel: a model's [`ExplicitForm`] in GPU buffers, its state in and out,
-//! and any number of steps in one submission.
+//! any number of steps in one submission, and the guard's figures of the last step (a few bytes
+//! a workgroup, read without the state).
 //!
 //! The state on the GPU is the displacement from rest and the velocity, in f32 (the displacement
 //! rather than the position keeps f32's relative precision on what changes: a spring's length is
@@ -49,18 +50,24 @@ pub struct ExplicitKernel {
     nn: usize,
     params: ParamsGpu,
     params_buffer: wgpu::Buffer,
-    /// The state before and after a step; `state[current]` holds it between steps.
+    /// The state before and after a step (then room for the guard's figures, two per
+    /// workgroup, which [`ExplicitKernel::read_health`] writes after the state it does not
+    /// hold); `state[current]` holds it between steps.
     state: [wgpu::Buffer; 2],
     current: usize,
     f_ext: wgpu::Buffer,
     coef: wgpu::Buffer,
     staging: wgpu::Buffer,
+    health_staging: wgpu::Buffer,
     /// Group `i` steps `state[i]` into `state[1 - i]`.
     bind_groups: [wgpu::BindGroup; 2],
     step: wgpu::ComputePipeline,
+    /// The guard's figures of a state (the shader's `guard_figures`).
+    guard: wgpu::ComputePipeline,
     /// Host copies: the state (`u` then `v`, component-major) and the load.
     host_state: Vec<f32>,
     host_load: Vec<f32>,
+    host_health: Vec<f32>,
     /// Set by the readback's callback.
     mapped: std::sync::Arc<std::sync::atomic::AtomicU8>,
 }
@@ -122,8 +129,11 @@ fn operator(form: &ExplicitForm) -> Result<(ParamsGpu, Vec<f32>), GpuError> {
     Ok((params, op))
 }
 
-/// The bind group layout and the step's pipeline of a force form.
-fn pipeline(device: &wgpu::Device, force: &ForceForm) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline) {
+/// The bind group layout, the step's pipeline of a force form and the guard's.
+fn pipelines(
+    device: &wgpu::Device,
+    force: &ForceForm,
+) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline, wgpu::ComputePipeline) {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("explicit_step.wgsl"),
         source: wgpu::ShaderSource::Wgsl(std::borrow::Cow::Borrowed(EXPLICIT_STEP_WGSL)),
@@ -151,19 +161,21 @@ fn pipeline(device: &wgpu::Device, force: &ForceForm) -> (wgpu::BindGroupLayout,
         bind_group_layouts: &[Some(&layout)],
         immediate_size: 0,
     });
-    let entry = match force {
+    let pipeline = |entry: &str| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    };
+    let step = pipeline(match force {
         ForceForm::Springs(_) => "lattice_step",
         ForceForm::Stencil(_) => "stencil_step",
-    };
-    let step = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: Some(&pipeline_layout),
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
     });
-    (layout, step)
+    (layout, step, pipeline("guard_figures"))
 }
 
 impl ExplicitKernel {
@@ -191,7 +203,8 @@ impl ExplicitKernel {
         }
         let (params, op) = operator(form)?;
         let limit = device.limits().max_storage_buffer_binding_size as usize;
-        if 4 * op.len().max(6 * nn) > limit {
+        let health_len = 2 * groups(nn) as usize;
+        if 4 * op.len().max(6 * nn + health_len) > limit {
             return Err(GpuError::Unsupported(format!("{nn} nodes need more than this GPU's {limit}-byte buffers")));
         }
         let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -201,8 +214,10 @@ impl ExplicitKernel {
         });
         let host_state = vec![0.0f32; 6 * nn];
         let host_load = vec![0.0f32; 3 * nn];
+        let host_health = vec![0.0f32; health_len];
         let state = [0, 1].map(|_| {
-            storage(device, "state", &host_state, wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC)
+            let zeros = vec![0.0f32; 6 * nn + health_len];
+            storage(device, "state", &zeros, wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC)
         });
         let f_ext = storage(device, "f_ext", &host_load, wgpu::BufferUsages::COPY_DST);
         let coef = storage(device, "coefficients", &coefficients(form), wgpu::BufferUsages::COPY_DST);
@@ -214,7 +229,13 @@ impl ExplicitKernel {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let (layout, step) = pipeline(device, &form.force);
+        let health_staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("guard readback"),
+            size: (4 * health_len) as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let (layout, step, guard) = pipelines(device, &form.force);
         let bind_groups = [0, 1].map(|i| {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("explicit step"),
@@ -239,10 +260,13 @@ impl ExplicitKernel {
             f_ext,
             coef,
             staging,
+            health_staging,
             bind_groups,
             step,
+            guard,
             host_state,
             host_load,
+            host_health,
             mapped: Default::default(),
         })
     }
@@ -268,6 +292,24 @@ impl ExplicitKernel {
             }
         }
         self.gpu.queue.write_buffer(&self.f_ext, 0, bytemuck::cast_slice(&self.host_load));
+    }
+
+    /// Writes the external forces of the nodes `nodes` only (a tool's, a few rows of the top
+    /// face: kilobytes where the whole load is megabytes).
+    pub fn write_load_nodes(&mut self, f_ext: &[Vec<f64>; 3], nodes: std::ops::Range<usize>) {
+        let nn = self.nn;
+        let nodes = nodes.start.min(nn)..nodes.end.min(nn);
+        if nodes.is_empty() {
+            return;
+        }
+        for c in 0..3 {
+            let at = c * nn + nodes.start..c * nn + nodes.end;
+            for (h, f) in self.host_load[at.clone()].iter_mut().zip(&f_ext[c][nodes.clone()]) {
+                *h = *f as f32;
+            }
+            let bytes = bytemuck::cast_slice(&self.host_load[at.clone()]);
+            self.gpu.queue.write_buffer(&self.f_ext, (4 * at.start) as u64, bytes);
+        }
     }
 
     /// Rewrites which components are free (a new load case).
@@ -303,24 +345,7 @@ impl ExplicitKernel {
         x: &mut [Vec<f64>; 3],
         v: &mut [Vec<f64>; 3],
     ) -> Result<(), GpuError> {
-        use std::sync::atomic::Ordering;
-        let bytes = (4 * self.host_state.len()) as u64;
-        let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        encoder.copy_buffer_to_buffer(&self.state[self.current], 0, &self.staging, 0, bytes);
-        self.gpu.queue.submit([encoder.finish()]);
-        let slice = self.staging.slice(..);
-        self.mapped.store(0, Ordering::Release);
-        let mapped = std::sync::Arc::clone(&self.mapped);
-        slice.map_async(wgpu::MapMode::Read, move |r| mapped.store(if r.is_ok() { 1 } else { 2 }, Ordering::Release));
-        self.gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
-        if self.mapped.load(Ordering::Acquire) != 1 {
-            return Err(GpuError::Readback("the readback buffer did not map".into()));
-        }
-        {
-            let data = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
-            self.host_state.copy_from_slice(bytemuck::cast_slice(&data));
-        }
-        self.staging.unmap();
+        read_into(&self.gpu, &self.mapped, (&self.state[self.current], 0), &self.staging, &mut self.host_state)?;
         let nn = self.nn;
         for c in 0..3 {
             for p in 0..nn {
@@ -331,6 +356,30 @@ impl ExplicitKernel {
         Ok(())
     }
 
+    /// Waits for the steps submitted and reads the guard's figures of the state they left: the
+    /// kinetic energy, J (NaN where a velocity is), and the largest displacement component, m.
+    /// One dispatch sums them per workgroup, and only those sums come back.
+    pub fn read_health(&mut self) -> Result<crate::sim::tissue::StepHealth, GpuError> {
+        let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let mut pass =
+                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None });
+            pass.set_pipeline(&self.guard);
+            pass.set_bind_group(0, &self.bind_groups[self.current], &[]);
+            pass.dispatch_workgroups(groups(self.nn), 1, 1);
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        let from = (&self.state[1 - self.current], (4 * 6 * self.nn) as u64);
+        read_into(&self.gpu, &self.mapped, from, &self.health_staging, &mut self.host_health)?;
+        let (mut energy, mut largest) = (0.0f64, 0.0f64);
+        for pair in self.host_health.chunks_exact(2) {
+            energy += f64::from(pair[0]);
+            // NaN is kept: `max` would drop it.
+            largest = if pair[1].is_nan() { f64::NAN } else { largest.max(f64::from(pair[1])) };
+        }
+        Ok(crate::sim::tissue::StepHealth { kinetic_energy_j: energy, largest_displacement_m: largest })
+    }
+
     /// Waits until the GPU has finished everything submitted.
     pub fn finish(&self) -> Result<(), GpuError> {
         self.gpu
@@ -339,4 +388,34 @@ impl ExplicitKernel {
             .map(|_| ())
             .map_err(|e| GpuError::Readback(e.to_string()))
     }
+}
+
+/// Copies `out.len()` values of `from` (a buffer, a byte offset) through `staging` into `out`,
+/// waiting for everything submitted.
+fn read_into(
+    gpu: &ComputeDevice,
+    mapped: &std::sync::Arc<std::sync::atomic::AtomicU8>,
+    (from, offset): (&wgpu::Buffer, u64),
+    staging: &wgpu::Buffer,
+    out: &mut [f32],
+) -> Result<(), GpuError> {
+    use std::sync::atomic::Ordering;
+    let bytes = (4 * out.len()) as u64;
+    let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    encoder.copy_buffer_to_buffer(from, offset, staging, 0, bytes);
+    gpu.queue.submit([encoder.finish()]);
+    let slice = staging.slice(..bytes);
+    mapped.store(0, Ordering::Release);
+    let done = std::sync::Arc::clone(mapped);
+    slice.map_async(wgpu::MapMode::Read, move |r| done.store(if r.is_ok() { 1 } else { 2 }, Ordering::Release));
+    gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
+    if mapped.load(Ordering::Acquire) != 1 {
+        return Err(GpuError::Readback("the readback buffer did not map".into()));
+    }
+    {
+        let data = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
+        out.copy_from_slice(bytemuck::cast_slice(&data));
+    }
+    staging.unmap();
+    Ok(())
 }

@@ -1,8 +1,10 @@
-//! [`GpuTissue`]: a CPU tissue whose symplectic Euler steps run on the GPU. The CPU model keeps
-//! the state between steps (tools, contact and the guard read and write it as always); a step
-//! sends the load (and the state, where something changed it), runs the kernel and reads the
-//! state back. Everything else (masses, forces for contact, parameters, implicit steps) is the
-//! CPU model's.
+//! [`GpuTissue`]: a CPU tissue whose symplectic Euler steps run on the GPU, where the state stays
+//! between steps. The CPU model keeps a copy that follows at [`Tissue::sync`] (to draw it, or for
+//! a tool that reads nodes) and before anything writes it (tools, contact, the guard's restore,
+//! an implicit step, new parameters); then the GPU takes the state again. The guard reads the
+//! kernel's figures of the last step instead of the state. A load sends only the nodes a tool
+//! changed. Everything else (masses, forces for contact, parameters, implicit steps) is the CPU
+//! model's.
 
 use super::device::{ComputeDevice, GpuError};
 use super::explicit::ExplicitKernel;
@@ -11,6 +13,7 @@ use crate::mechanics::grid::Grid;
 use crate::mechanics::msm::MsmParams;
 use crate::response::damping::Damping;
 use crate::sim::explicit_form::ExplicitForm;
+use crate::sim::tissue::StepHealth;
 use crate::sim::{Integrator, Tissue};
 
 /// A tissue stepped on the GPU.
@@ -22,9 +25,15 @@ pub struct GpuTissue {
     rest: [Vec<f64>; 3],
     /// Whether the CPU's state changed since the GPU last had it.
     stale: bool,
-    /// Whether the load may have changed since the GPU last had it (it is sent only then:
-    /// 3 MB at 64^3).
+    /// Whether the GPU's state is newer than the CPU's copy (it stepped since the last sync).
+    behind: bool,
+    /// Whether the whole load may have changed since the GPU last had it (sent only then: 3 MB
+    /// at 64^3).
     load_stale: bool,
+    /// The nodes whose load changed since the GPU last had it (sent alone otherwise).
+    load_nodes: Option<std::ops::Range<usize>>,
+    /// A readback that failed where no error could be returned: the next step's error.
+    failed: Option<String>,
 }
 
 impl GpuTissue {
@@ -34,7 +43,17 @@ impl GpuTissue {
         let kernel = ExplicitKernel::new(gpu, &form)?;
         let grid = inner.grid();
         let rest = std::array::from_fn(|c| (0..grid.num_nodes()).map(|p| grid.position(p)[c]).collect());
-        Ok(Self { inner, gpu: gpu.clone(), kernel, rest, stale: true, load_stale: true })
+        Ok(Self {
+            inner,
+            gpu: gpu.clone(),
+            kernel,
+            rest,
+            stale: true,
+            behind: false,
+            load_stale: true,
+            load_nodes: None,
+            failed: None,
+        })
     }
 
     /// The adapter the steps run on, in words.
@@ -42,20 +61,25 @@ impl GpuTissue {
         self.gpu.describe()
     }
 
-    /// `steps` steps of `dt` with the load held, all in one submission and without reading the
-    /// state back until the end: the GPU's own speed, for `bench`.
+    /// `steps` steps of `dt` with the load held, all in one submission, waiting for them: the
+    /// GPU's own speed, for `bench` (the state stays on the GPU).
     pub fn run_unsynchronised(&mut self, dt: f64, steps: usize) -> Result<(), String> {
         self.sync_in();
         self.kernel.run(dt, steps);
+        self.behind = true;
         self.kernel.finish().map_err(|e| e.to_string())
     }
 
-    /// Reads the GPU's state into the CPU model (after [`GpuTissue::run_unsynchronised`]).
+    /// Reads the GPU's state into the CPU model, whether or not it stepped since (`bench`'s
+    /// figure of a readback).
     pub fn read_back(&mut self) -> Result<(), String> {
         let (x, v) = self.inner.x_v_mut();
-        self.kernel.read_state(&self.rest, x, v).map_err(|e| e.to_string())
+        self.kernel.read_state(&self.rest, x, v).map_err(|e| e.to_string())?;
+        self.behind = false;
+        Ok(())
     }
 
+    /// The state and the load to the GPU where the CPU changed them.
     fn sync_in(&mut self) {
         if self.stale {
             self.kernel.write_state(&self.rest, self.inner.x(), self.inner.v());
@@ -64,7 +88,25 @@ impl GpuTissue {
         if self.load_stale {
             self.kernel.write_load(self.inner.f_ext_mut());
             self.load_stale = false;
+            self.load_nodes = None;
+        } else if let Some(nodes) = self.load_nodes.take() {
+            self.kernel.write_load_nodes(self.inner.f_ext_mut(), nodes);
         }
+    }
+
+    /// The state back from the GPU where it stepped since.
+    fn sync_out(&mut self) -> Result<(), String> {
+        if self.behind { self.read_back() } else { Ok(()) }
+    }
+
+    /// [`GpuTissue::sync_out`] before the CPU writes the state, which the GPU then takes again;
+    /// a failed readback is the next step's error.
+    fn before_write(&mut self) {
+        if let Err(e) = self.sync_out() {
+            self.failed.get_or_insert(e);
+            self.behind = false;
+        }
+        self.stale = true;
     }
 
     fn rebuild(&mut self) -> Result<(), String> {
@@ -90,18 +132,18 @@ impl Tissue for GpuTissue {
         self.inner.x()
     }
     fn x_mut(&mut self) -> &mut [Vec<f64>; 3] {
-        self.stale = true;
+        self.before_write();
         self.inner.x_mut()
     }
     fn v(&self) -> &[Vec<f64>; 3] {
         self.inner.v()
     }
     fn v_mut(&mut self) -> &mut [Vec<f64>; 3] {
-        self.stale = true;
+        self.before_write();
         self.inner.v_mut()
     }
     fn x_v_mut(&mut self) -> (&mut [Vec<f64>; 3], &mut [Vec<f64>; 3]) {
-        self.stale = true;
+        self.before_write();
         self.inner.x_v_mut()
     }
     fn f_ext_mut(&mut self) -> &mut [Vec<f64>; 3] {
@@ -112,17 +154,25 @@ impl Tissue for GpuTissue {
         self.inner.free()
     }
     fn forces(&mut self) -> &[Vec<f64>; 3] {
+        if let Err(e) = self.sync_out() {
+            self.failed.get_or_insert(e);
+        }
         self.inner.forces()
     }
     fn step(&mut self, integrator: Integrator, dt: f64) -> Result<(), String> {
+        if let Some(e) = self.failed.take() {
+            return Err(format!("the GPU's state could not be read back: {e}"));
+        }
         if integrator != Integrator::Symplectic {
             // The GPU has the explicit step only: an implicit one runs on the CPU's state.
+            self.sync_out()?;
             self.stale = true;
             return self.inner.step(integrator, dt);
         }
         self.sync_in();
         self.kernel.run(dt, 1);
-        self.read_back()
+        self.behind = true;
+        Ok(())
     }
     fn kinetic_energy(&self) -> f64 {
         self.inner.kinetic_energy()
@@ -131,6 +181,7 @@ impl Tissue for GpuTissue {
         self.inner.explicit_dt_limit()
     }
     fn apply_case(&mut self, case: &LoadCase) {
+        self.before_write();
         self.inner.apply_case(case);
         if let Ok(form) = self.inner.explicit_form() {
             self.kernel.write_free(&form);
@@ -142,10 +193,12 @@ impl Tissue for GpuTissue {
         self.inner.params()
     }
     fn set_params(&mut self, params: MsmParams) -> Result<(), String> {
+        self.sync_out()?;
         self.inner.set_params(params)?;
         self.rebuild()
     }
     fn set_damping_ratio(&mut self, zeta: f64) -> Result<(), String> {
+        self.sync_out()?;
         self.inner.set_damping_ratio(zeta)?;
         self.rebuild()
     }
@@ -167,6 +220,23 @@ impl Tissue for GpuTissue {
     fn set_anchor(&mut self, anchor: Option<crate::mechanics::anchor::Anchor>) -> bool {
         // The implicit steps run on the CPU's model, which holds the drag in its solve.
         self.inner.set_anchor(anchor)
+    }
+    fn f_ext_mut_nodes(&mut self, nodes: std::ops::Range<usize>) -> &mut [Vec<f64>; 3] {
+        self.load_nodes = Some(match self.load_nodes.take() {
+            Some(had) => had.start.min(nodes.start)..had.end.max(nodes.end),
+            None => nodes,
+        });
+        self.inner.f_ext_mut()
+    }
+    fn state_on_device(&self) -> bool {
+        true
+    }
+    fn sync(&mut self) -> Result<(), String> {
+        self.sync_out()
+    }
+    fn step_health(&mut self) -> Option<Result<StepHealth, String>> {
+        // Where it did not step since the state came back, the CPU's copy is the state.
+        self.behind.then(|| self.kernel.read_health().map_err(|e| e.to_string()))
     }
     fn computed_on(&self) -> Option<String> {
         Some(format!("symplectic steps on the GPU: {}", self.adapter()))

@@ -12,6 +12,13 @@
 //!
 //! May use: [`crate::response`], [`crate::mechanics`], [`crate::io`].
 
+/// The interactive tick, ms: the viewer's physics loop advances the clock by one tick at a time
+/// (its steps substep it), the probe's contact solve runs at most once a tick (the haptic rate),
+/// and the benchmarks time one.
+pub const TICK_MS: u64 = 1;
+/// [`TICK_MS`] in seconds.
+pub const TICK_S: f64 = TICK_MS as f64 * 1e-3;
+
 pub mod explicit_form;
 pub mod fem_tissue;
 pub mod integrator;

@@ -1,5 +1,11 @@
 //! The running tissue: any [`Tissue`] model stepped at a fixed time step under the step policy,
 //! with the user's tools and a blow-up guard.
+//!
+//! Where the tissue's state stays on the GPU between steps ([`Tissue::state_on_device`]), the
+//! guard reads the GPU's figures of a step once a tick ([`super::TICK_S`]) instead of the state
+//! every step, the last good state is kept where the state comes back ([`Simulation::sync`], to
+//! draw or read it), and a tool that reads or moves nodes (the drag, the model's own node
+//! contact) brings the state back every step.
 
 use super::integrator::{DEFAULT_DYNAMIC_BUDGET, Integrator, StepLimit, choose_step};
 use super::msm_tissue::MsmTissue;
@@ -25,6 +31,10 @@ pub struct BlowUp {
 
 /// Consecutive recoveries after which the guard stops a run ([`BlowUp::fatal`]).
 pub const MAX_RECOVERIES: u32 = 3;
+
+/// A state whose kinetic energy is that of the whole mass moving at this speed has run away,
+/// m/s.
+const RUNAWAY_SPEED_M_S: f64 = 10.0;
 
 /// Why a state is not good.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,6 +72,8 @@ pub struct Simulation {
     good_v: [Vec<f64>; 3],
     good_time: Option<f64>,
     steps_since_good: usize,
+    /// Steps since the guard last checked a state that stays on the GPU.
+    steps_unchecked: usize,
     rest: [Vec<f64>; 3],
     /// Nodes on the cube's surface: the only ones the probe touches.
     surface: Vec<usize>,
@@ -109,6 +121,7 @@ impl Simulation {
             good_v: zeros(),
             good_time: None,
             steps_since_good: 0,
+            steps_unchecked: 0,
             rest,
             surface: (0..nn).filter(|&p| grid.on_boundary(p)).collect(),
             surface_probe: None,
@@ -219,6 +232,10 @@ impl Simulation {
     pub fn step(&mut self) -> Result<(), BlowUp> {
         self.apply_tool_load();
         let anchored = self.anchor_drag();
+        // A state on the GPU comes back every step only for a tool that reads or moves nodes.
+        let on_device = self.tissue.state_on_device();
+        let reads_nodes = on_device && (self.node_contact() || matches!(self.tool, Tool::Drag { .. }));
+        let mut stepped = if reads_nodes { self.tissue.sync() } else { Ok(()) };
         if self.node_contact() {
             let x = self.tissue.x();
             for &p in &self.surface {
@@ -227,7 +244,12 @@ impl Simulation {
                 }
             }
         }
-        let stepped = self.tissue.step(self.integrator, self.dt);
+        if stepped.is_ok() {
+            stepped = self.tissue.step(self.integrator, self.dt);
+        }
+        if stepped.is_ok() && reads_nodes {
+            stepped = self.tissue.sync();
+        }
         if stepped.is_ok() {
             if anchored {
                 self.anchored_drag_force();
@@ -240,20 +262,26 @@ impl Simulation {
         }
         self.enforce_contact();
         self.time_s += self.dt;
-        let unhealthy = if stepped.is_ok() { self.unhealthy() } else { None };
+        // Where the state is here, the guard reads it every step; on the GPU, the figures of the
+        // step that ends a tick.
+        self.steps_unchecked += 1;
+        let checks = !on_device || self.steps_unchecked as f64 * self.dt >= super::TICK_S * (1.0 - 1e-9);
+        let mut unhealthy = None;
+        if stepped.is_ok() && checks {
+            self.steps_unchecked = 0;
+            match self.tissue.step_health() {
+                None => unhealthy = self.unhealthy(),
+                Some(Ok(health)) => unhealthy = self.unhealthy_figures(health),
+                Some(Err(e)) => stepped = Err(e),
+            }
+        }
         if stepped.is_ok() && unhealthy.is_none() {
             if self.time_s > self.last_blow_up_s {
                 self.recoveries = 0;
             }
             self.steps_since_good += 1;
-            if self.good_time.is_none() || self.steps_since_good >= 100 {
-                let (x, v) = (self.tissue.x(), self.tissue.v());
-                for c in 0..3 {
-                    self.good_x[c].copy_from_slice(&x[c]);
-                    self.good_v[c].copy_from_slice(&v[c]);
-                }
-                self.good_time = Some(self.time_s);
-                self.steps_since_good = 0;
+            if !on_device && (self.good_time.is_none() || self.steps_since_good >= 100) {
+                self.keep_good();
             }
             return Ok(());
         }
@@ -278,12 +306,40 @@ impl Simulation {
         Err(BlowUp { time_s, message, fatal })
     }
 
+    /// The state now as the last good one.
+    fn keep_good(&mut self) {
+        let (x, v) = (self.tissue.x(), self.tissue.v());
+        for c in 0..3 {
+            self.good_x[c].copy_from_slice(&x[c]);
+            self.good_v[c].copy_from_slice(&v[c]);
+        }
+        self.good_time = Some(self.time_s);
+        self.steps_since_good = 0;
+    }
+
+    /// Brings the tissue's state back where its steps left it on the GPU (a no-op on the CPU),
+    /// to draw or read it; a healthy state brought back is kept as the last good one.
+    pub fn sync(&mut self) -> Result<(), String> {
+        if !self.tissue.state_on_device() {
+            return Ok(());
+        }
+        self.tissue.sync()?;
+        if self.unhealthy().is_none() {
+            self.keep_good();
+        }
+        Ok(())
+    }
+
     /// What went wrong in a step that failed or left the state unhealthy, and what to change.
     fn diagnose(&self, stepped: Result<(), String>, unhealthy: Option<Unhealthy>) -> String {
         let limit = self.dt_limit();
         let dt = crate::io::num(self.dt);
         if let Err(e) = stepped {
-            return format!("the implicit solve failed ({e}); the state was reset");
+            return if self.tissue.state_on_device() && self.integrator == Integrator::Symplectic {
+                format!("the GPU's step failed ({e}); the state was reset")
+            } else {
+                format!("the implicit solve failed ({e}); the state was reset")
+            };
         }
         if self.integrator == Integrator::Symplectic && self.dt > limit {
             return format!(
@@ -354,7 +410,7 @@ impl Simulation {
             // A fold without an early exit: the compiler vectorises it.
             x[c].iter().zip(&self.rest[c]).fold(false, |out, (x, r)| out | !within((x - r - shift).abs(), l))
         });
-        let energetic = !within(self.tissue.kinetic_energy(), 0.5 * self.tissue.total_mass() * 10.0 * 10.0);
+        let energetic = !within(self.tissue.kinetic_energy(), self.runaway_energy());
         if !(outside || energetic) {
             return None;
         }
@@ -366,6 +422,27 @@ impl Simulation {
         } else {
             Unhealthy::Energy
         })
+    }
+
+    /// The kinetic energy of a state that has run away, J.
+    fn runaway_energy(&self) -> f64 {
+        0.5 * self.tissue.total_mass() * RUNAWAY_SPEED_M_S * RUNAWAY_SPEED_M_S
+    }
+
+    /// [`Simulation::unhealthy`] from the GPU's figures of a step: a NaN, a node more than the
+    /// cube's side from rest (checked here for a held cube only: one held nowhere may move as a
+    /// whole, which is checked where the state comes back), or a runaway energy.
+    fn unhealthy_figures(&self, health: super::tissue::StepHealth) -> Option<Unhealthy> {
+        let held = self.tissue.free().contains(&0.0);
+        if !(health.kinetic_energy_j.is_finite() && health.largest_displacement_m.is_finite()) {
+            Some(Unhealthy::NonFinite)
+        } else if held && health.largest_displacement_m > crate::mechanics::grid::CUBE_SIDE_M {
+            Some(Unhealthy::OutsideCube)
+        } else if health.kinetic_energy_j > self.runaway_energy() {
+            Some(Unhealthy::Energy)
+        } else {
+            None
+        }
     }
 
     /// Sets the probe's contact: on the material's surface compliance (`Some`), or the running
@@ -386,8 +463,8 @@ impl Simulation {
         self.probe_on_surface = false;
         let carries = self.tissue.carries_contact_loads();
         // The load is taken only where it changes (a GPU step sends it again when taken).
-        if !self.tool_loaded.nodes().is_empty() {
-            let f_ext = self.tissue.f_ext_mut();
+        if let Some(nodes) = span(self.tool_loaded.nodes().iter().copied()) {
+            let f_ext = self.tissue.f_ext_mut_nodes(nodes);
             for &p in self.tool_loaded.nodes() {
                 for c in 0..3 {
                     f_ext[c][p] = self.base_load[c][p];
@@ -399,8 +476,8 @@ impl Simulation {
             && super::surface_probe::SurfaceProbe::covers(centre)
             && let Ok(force) = probe.update(centre, radius)
         {
-            if carries {
-                let f_ext = self.tissue.f_ext_mut();
+            if carries && let Some(nodes) = span(probe.loads().iter().map(|&(node, _)| node)) {
+                let f_ext = self.tissue.f_ext_mut_nodes(nodes);
                 for &(node, f) in probe.loads() {
                     for c in 0..3 {
                         f_ext[c][node] += f[c];
@@ -436,7 +513,7 @@ impl Simulation {
             return false;
         }
         let pull: [f64; 3] = std::array::from_fn(|c| DRAG_STIFFNESS * (target[c] - self.tissue.x()[c][node]));
-        let f_ext = self.tissue.f_ext_mut();
+        let f_ext = self.tissue.f_ext_mut_nodes(node..node + 1);
         for c in 0..3 {
             f_ext[c][node] += pull[c];
         }
@@ -560,6 +637,13 @@ impl Simulation {
             *o = [x[0][p] as f32, x[1][p] as f32, x[2][p] as f32];
         }
     }
+}
+
+/// The range from the least to the greatest of `nodes` (`None` for none).
+fn span(nodes: impl Iterator<Item = usize>) -> Option<std::ops::Range<usize>> {
+    nodes.fold(None, |r: Option<std::ops::Range<usize>>, p| {
+        Some(r.map_or(p..p + 1, |r| r.start.min(p)..r.end.max(p + 1)))
+    })
 }
 
 /// A set of nodes, each listed once, that allocates nothing after it is made.

@@ -21,9 +21,6 @@ use crate::response::surface_compliance::{
     ComplianceError, ContactScratch, DEFAULT_DIVISIONS, MAX_CONTACT_NODES, SurfaceCompliance,
 };
 
-/// A still sphere's contact is solved again at most this often, s: the rate a haptic device
-/// reads the force (1 kHz), and the viewer's tick, whose substeps hold the loads.
-pub const HAPTIC_PERIOD_S: f64 = 1e-3;
 /// Presses per step at most while finding the lag's fixed point.
 pub const MAX_LAG_ITERATIONS: usize = 6;
 /// The fixed point is reached when the lag moves by less than this, metres.
@@ -116,9 +113,9 @@ impl SurfaceProbe {
     }
 
     /// The force of the tissue on the sphere (`centre`, `radius`), newtons, solved again only
-    /// when the sphere moved or, with the lag, when it was last solved [`HAPTIC_PERIOD_S`] or more
-    /// ago and the lag has moved since (its loads held over the substeps of a tick). Allocates
-    /// nothing.
+    /// when the sphere moved or, with the lag, when it was last solved a tick ([`super::TICK_S`],
+    /// the rate a haptic device reads the force) or more ago and the lag has moved since (its
+    /// loads held over the substeps of a tick). Allocates nothing.
     pub fn update(&mut self, centre: [f64; 3], radius: f64) -> Result<[f64; 3], ComplianceError> {
         if self.lag.is_none() {
             if self.last == Some((centre, radius)) {
@@ -134,7 +131,7 @@ impl SurfaceProbe {
         let (x, y) = (centre[0], centre[1]);
         let mut d = self.delta;
         if self.last == Some((centre, radius)) {
-            if self.since_solve_s < HAPTIC_PERIOD_S * (1.0 - 1e-9) {
+            if self.since_solve_s < super::TICK_S * (1.0 - 1e-9) {
                 return Ok(self.force);
             }
             let g = self.lag.as_ref().map_or([0.0; 3], |l| l.lag(x, y));

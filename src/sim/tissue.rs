@@ -6,12 +6,26 @@
 //! State is node-wise in structure-of-arrays form: positions `x[c][p]`, velocities `v[c][p]`,
 //! external forces `f_ext[c][p]` (components `c = 0..3`, node `p`), and `free[p]` (1 for a free
 //! node, 0 for a fixed one). Steps must not allocate after their first call.
+//!
+//! A tissue whose state stays on another device between steps (the GPU's,
+//! [`Tissue::state_on_device`]) keeps these arrays as a copy that follows only at
+//! [`Tissue::sync`] and before anything writes them; its steps report the guard's figures
+//! ([`Tissue::step_health`]) without the state.
 
 use super::integrator::Integrator;
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::msm::MsmParams;
 use crate::response::damping::Damping;
+
+/// The guard's figures of a step, from where the state lives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepHealth {
+    /// Kinetic energy, J (NaN where a velocity is).
+    pub kinetic_energy_j: f64,
+    /// The largest displacement component of any node from rest, m (NaN where one is).
+    pub largest_displacement_m: f64,
+}
 
 /// A tissue model the interactive simulation can step.
 pub trait Tissue: Send + std::fmt::Debug {
@@ -84,4 +98,25 @@ pub trait Tissue: Send + std::fmt::Debug {
     }
     /// Its symplectic Euler step as plain numbers (for the GPU's step), or why it has none.
     fn explicit_form(&self) -> Result<super::explicit_form::ExplicitForm, String>;
+    /// The load, of which only the nodes `nodes` change before the next step (a tissue whose
+    /// steps run on the GPU sends only those).
+    fn f_ext_mut_nodes(&mut self, nodes: std::ops::Range<usize>) -> &mut [Vec<f64>; 3] {
+        let _ = nodes;
+        self.f_ext_mut()
+    }
+    /// Whether its symplectic steps leave the state on another device (the GPU), so that
+    /// [`Tissue::x`], [`Tissue::v`] and [`Tissue::kinetic_energy`] are those of the last
+    /// [`Tissue::sync`] (what writes the state brings it back first).
+    fn state_on_device(&self) -> bool {
+        false
+    }
+    /// Brings the state back from where the steps left it (nothing to do on the CPU).
+    fn sync(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+    /// Where the state is on another device: the guard's figures of its last step, read there
+    /// (a few bytes, not the state). `None` where the state is here (the guard reads it).
+    fn step_health(&mut self) -> Option<Result<StepHealth, String>> {
+        None
+    }
 }

@@ -1,9 +1,11 @@
 //! `bench`'s GPU at scale: the GPU's symplectic step alone, and the 1 ms tick of the hex lattice
 //! and the linear FEM at 16^3, 32^3 and 64^3 on the GPU against the CPU's in the same run, with
-//! how far the GPU's f32 moves the answer from the CPU's f64.
+//! how far the GPU's f32 moves the answer from the CPU's f64; and the tick as the viewer and
+//! `simulate` run it on the GPU, through the simulation with the probe pressed.
 //!
 //! The tissue is undamped (a damping ratio needs the fundamental, whose factor is too large at
-//! 64^3), held by its bottom face and pulled by 10 N on its top face (load case `A`, axis 3).
+//! 64^3), held by its bottom face and pulled by 10 N on its top face (load case `A`, axis 3), or
+//! pressed by the probe on the material's surface compliance ([`super::pressed`]).
 
 use std::collections::BTreeMap;
 
@@ -11,8 +13,10 @@ use crate::gpu::{ComputeDevice, GpuTissue};
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
+use crate::sim::TICK_S;
+use crate::sim::surface_probe::MaterialSurface;
 use crate::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Tissue};
-use crate::study::timing::{VIEWER_TICK_S as TICK_S, time_fallible};
+use crate::study::timing::time_fallible;
 
 /// The resolutions timed on the GPU, nodes per edge (up to the largest grid).
 pub const GPU_NODES: [usize; 3] = [16, 32, crate::mechanics::grid::MAX_NODES_PER_AXIS];
@@ -33,9 +37,13 @@ pub struct GpuScale {
     /// One tick on the GPU under a held load (sent once, before): the substeps in one
     /// submission, waited for, no readback, s.
     pub gpu_tick_s: f64,
-    /// The same and the whole state read back into the CPU's f64 model once (`GpuTissue`'s
-    /// steps in the viewer and in `simulate` read it back after every substep), s.
+    /// The same and the whole state read back into the CPU's f64 model once (what drawing it
+    /// costs, at most 60 times a second in the viewer), s.
     pub gpu_tick_readback_s: f64,
+    /// The viewer's and `simulate`'s tick on the GPU: the simulation's 1 ms tick with the probe
+    /// pressed 4 mm on the material's surface compliance, its loads sent every substep and the
+    /// guard's figures read once a tick, the state kept on the GPU ([`super::pressed`]), s.
+    pub sim_tick_s: f64,
     /// The same tick on the CPU, f64, on the physics pool (`cpu_threads` threads), s.
     pub cpu_tick_s: f64,
     /// The physics pool's threads.
@@ -80,6 +88,8 @@ pub fn unavailable(why: &crate::gpu::GpuError) -> GpuBench {
 
 /// The GPU's figures on `gpu`.
 pub fn measure(gpu: &ComputeDevice) -> anyhow::Result<GpuBench> {
+    let surface =
+        MaterialSurface::load_or_compute(&Material::object_a(), crate::io::cache_dir().as_deref(), &mut |_| true)?;
     let mut gpu_step_s = BTreeMap::new();
     let mut gpu_scale = Vec::new();
     for model in models() {
@@ -91,14 +101,14 @@ pub fn measure(gpu: &ComputeDevice) -> anyhow::Result<GpuBench> {
             let step = time_fallible(0.3, || on_gpu.run_unsynchronised(0.5 * on_gpu.explicit_dt_limit(), 100))
                 .map_err(fail)?;
             gpu_step_s.insert(format!("{}/{nodes}", model.name()), step / 100.0);
-            gpu_scale.push(scale(gpu, model, grid).map_err(fail)?);
+            gpu_scale.push(scale(gpu, model, grid, &surface).map_err(fail)?);
         }
     }
     Ok(GpuBench { gpu_adapter: gpu.describe(), gpu_step_s, gpu_scale })
 }
 
 /// One model x resolution's tick on both, and the drift between them.
-fn scale(gpu: &ComputeDevice, model: Model, grid: Grid) -> Result<GpuScale, String> {
+fn scale(gpu: &ComputeDevice, model: Model, grid: Grid, surface: &MaterialSurface) -> Result<GpuScale, String> {
     let built = || tissue(model, grid).map_err(|e| format!("{e:#}"));
     let mut cpu = built()?;
     let mut on_gpu = GpuTissue::new(gpu, built()?).map_err(|e| e.to_string())?;
@@ -131,12 +141,16 @@ fn scale(gpu: &ComputeDevice, model: Model, grid: Grid) -> Result<GpuScale, Stri
         on_gpu.read_back()
     })?;
     let cpu_tick_s = crate::mechanics::parallel::on_pool(|| time_fallible(0.3, || cpu_tick(&mut cpu)))?;
+    let undamped = model.build_undamped_on(grid, &Material::object_a(), None).map_err(|e| format!("{e:#}"))?;
+    let mut sim = super::pressed::scene(Box::new(GpuTissue::new(gpu, undamped).map_err(|e| e.to_string())?), surface);
+    let sim_tick_s = super::pressed::time_tick(&mut sim, Integrator::Symplectic, substeps)?;
     Ok(GpuScale {
         model: model.name(),
         nodes: grid.n(),
         substeps,
         gpu_tick_s,
         gpu_tick_readback_s,
+        sim_tick_s,
         cpu_tick_s,
         cpu_threads: crate::mechanics::parallel::pool().map_or(1, rayon::ThreadPool::current_num_threads),
         gpu_speedup: cpu_tick_s / gpu_tick_s,
@@ -152,12 +166,13 @@ impl GpuBench {
             s += &format!("  GPU step alone {k:<22} {:10.1} us\n", t * 1e6);
         }
         if !self.gpu_scale.is_empty() {
-            s += "1 ms tick, undamped, pulled by 10 N (GPU f32 against CPU f64 in the same run):\n";
+            s += "1 ms tick, undamped, pulled by 10 N (GPU f32 against CPU f64 in the same run), and the viewer's \
+                  tick on the GPU with the probe pressed:\n";
         }
         for g in &self.gpu_scale {
             s += &format!(
                 "  {:<11} {:>2}^3 x{:<3} GPU {:9.1} us ({:9.1} us with the state read back), CPU ({} threads) \
-                 {:9.1} us: {:.1}x; f32 drift after 20 ticks {:.1e}\n",
+                 {:9.1} us: {:.1}x; f32 drift after 20 ticks {:.1e}; pressed {:9.1} us\n",
                 g.model,
                 g.nodes,
                 g.substeps,
@@ -166,7 +181,8 @@ impl GpuBench {
                 g.cpu_threads,
                 g.cpu_tick_s * 1e6,
                 g.gpu_speedup,
-                g.f32_drift
+                g.f32_drift,
+                g.sim_tick_s * 1e6
             );
         }
         s

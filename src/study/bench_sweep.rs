@@ -4,27 +4,24 @@
 //! takes; the largest resolution each model runs at 1 kHz; and the GPU's figures where an
 //! adapter computes ([`super::bench_gpu`]).
 //!
-//! The scene is the viewer's: object A held by its bottom face, the lattice's shipped tissue
-//! carried to the grid, damping ratio 0.2, and the 15 mm probe pressed 4 mm into the top face
-//! with the material's surface compliance, pressed along `sin^2` over 30 ticks and held until
-//! its ringing dies down before the ticks are timed.
+//! The scene is the viewer's ([`super::pressed`]): object A held by its bottom face, the
+//! lattice's shipped tissue carried to the grid, damping ratio 0.2, and the 15 mm probe pressed
+//! 4 mm into the top face with the material's surface compliance.
 
 use std::collections::BTreeMap;
 
 use crate::gpu::Compute;
-use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
-use crate::sim::surface_probe::{MaterialSurface, SurfaceProbe};
-use crate::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, Tool};
-use crate::study::timing::VIEWER_TICK_S as TICK_S;
+use crate::sim::TICK_S;
+use crate::sim::surface_probe::MaterialSurface;
+use crate::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model};
+use crate::study::pressed::{scene, time_tick};
 
 /// The resolutions swept, nodes per edge.
 pub const SWEEP_NODES: [usize; 5] = [8, 12, 16, 24, 32];
 /// The integrators swept (the full-tangent implicit step, a factorisation per step, is left out).
 pub const SWEEP_INTEGRATORS: [Integrator; 3] = [Integrator::Symplectic, Integrator::Prefactored, Integrator::Newmark];
-/// How deep the probe presses, m.
-const PROBE_DEPTH_M: f64 = 0.004;
 
 /// One model x resolution x integrator.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -68,66 +65,6 @@ pub struct Sweep {
     pub gpu: super::bench_gpu::GpuBench,
 }
 
-/// The viewer's scene on `grid` for `model`, with the material's surface compliance.
-fn scene(model: Model, grid: Grid, surface: &MaterialSurface, compute: Compute) -> anyhow::Result<Simulation> {
-    let material = Material::object_a();
-    let tissue = model.build_on(grid, &material, None, crate::response::damping::DEFAULT_DAMPING_RATIO)?;
-    let tissue = compute.place(tissue)?;
-    let mut sim =
-        Simulation::with_tissue(tissue, Integrator::Symplectic, TICK_S, Some(&LoadCase::bottom_clamp(&grid, "A")));
-    let zeta = sim.tissue.damping().ratio();
-    sim.set_surface_probe(Some(SurfaceProbe::on(surface, grid, zeta)));
-    Ok(sim)
-}
-
-/// One tick of `integrator` at `substeps`: from rest the probe is pressed to its 4 mm along
-/// `sin^2` over 30 ticks (3 where one tick takes over 50 ms) and held for 300 ticks or 1 s of
-/// wall time (at least 2), then the median of ticks timed one by one over about 0.2 s (at least
-/// 3).
-/// On the physics pool, as the viewer's loop runs.
-fn time_tick(sim: &mut Simulation, integrator: Integrator, substeps: usize) -> Result<f64, String> {
-    crate::mechanics::parallel::on_pool(|| time_tick_here(sim, integrator, substeps))
-}
-
-fn time_tick_here(sim: &mut Simulation, integrator: Integrator, substeps: usize) -> Result<f64, String> {
-    sim.reset();
-    sim.try_set_integrator(Some(integrator), TICK_S / substeps as f64)?;
-    let r = crate::validate::touch::PROBE_RADIUS_M;
-    let top = crate::mechanics::grid::CUBE_SIDE_M + r;
-    let mut failed = None;
-    let mut tick = |sim: &mut Simulation, depth: f64| {
-        sim.tool = Tool::Probe { centre: [0.03, 0.05, top - depth], radius: r };
-        let start = std::time::Instant::now();
-        for _ in 0..substeps {
-            if let Err(e) = sim.step() {
-                failed.get_or_insert(e.message);
-            }
-        }
-        start.elapsed().as_secs_f64()
-    };
-    let first = tick(sim, 0.0);
-    let ramp = if first > 0.05 { 3 } else { 30 };
-    for i in 1..=ramp {
-        let s = (0.5 * std::f64::consts::PI * i as f64 / ramp as f64).sin();
-        tick(sim, PROBE_DEPTH_M * s * s);
-    }
-    // Held until the press's ringing has died down (the probe's contact solve takes more
-    // iterations while the material's modes ring: 2.3x the steady tick just after the press).
-    let (held_since, mut held) = (std::time::Instant::now(), 0);
-    while held < 2 || (held < 300 && held_since.elapsed().as_secs_f64() < 1.0) {
-        tick(sim, PROBE_DEPTH_M);
-        held += 1;
-    }
-    let (mut times, mut spent) = (Vec::new(), 0.0);
-    while times.len() < 3 || (spent < 0.2 && times.len() < 1000) {
-        let t = tick(sim, PROBE_DEPTH_M);
-        spent += t;
-        times.push(t);
-    }
-    times.sort_by(f64::total_cmp);
-    failed.map_or(Ok(times[times.len() / 2]), Err)
-}
-
 /// Every integrator of `model` on `grid` for `compute`, into `ticks`.
 pub fn sweep_model(
     model: Model,
@@ -137,7 +74,8 @@ pub fn sweep_model(
     ticks: &mut Vec<SweepTick>,
 ) -> anyhow::Result<()> {
     let grid = Grid::new(nodes)?;
-    let mut sim = scene(model, grid, surface, compute)?;
+    let tissue = model.build_on(grid, &Material::object_a(), None, crate::response::damping::DEFAULT_DAMPING_RATIO)?;
+    let mut sim = scene(compute.place(tissue)?, surface);
     let (limit, damping) = (sim.limit(), sim.tissue.damping());
     let auto = crate::sim::choose_step(None, TICK_S, limit, damping, DEFAULT_DYNAMIC_BUDGET).ok();
     let integrators: &[Integrator] =

@@ -2,7 +2,8 @@
 //! measurement of one model [`chart_measure`], [`pareto`] fronts, [`plot`]), the stability study
 //! of explicit integration ([`stability`]), the choice of the smallest model that meets a scene's
 //! error and rate budget ([`choose`]), the paper's tables and figures ([`reproduce`]), timings
-//! ([`timing`], [`bench`](mod@bench), its [`bench_sweep`] of resolutions) and scripted
+//! ([`timing`], [`bench`](mod@bench), its [`bench_sweep`] of resolutions and [`bench_gpu`], both
+//! on the viewer's scene with the probe [`pressed`]) and scripted
 //! interaction ([`script`], `simulate`).
 //!
 //! May use: calibrate, validate, gpu, sim, response, mechanics, io.
@@ -16,6 +17,7 @@ pub mod chart_point;
 pub mod choose;
 pub mod pareto;
 pub mod plot;
+pub mod pressed;
 pub mod reproduce;
 pub mod script;
 pub mod stability;

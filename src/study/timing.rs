@@ -3,9 +3,6 @@
 
 use std::time::Instant;
 
-/// The viewer's physics tick (`app::physics::TICK`), s: what the benchmarks time.
-pub const VIEWER_TICK_S: f64 = 1e-3;
-
 /// Median time per call of `f`, from batches of at least ~20 ms over about `budget_s` seconds.
 pub fn time_per_call(budget_s: f64, mut f: impl FnMut()) -> f64 {
     f();

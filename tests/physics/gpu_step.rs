@@ -66,3 +66,94 @@ fn the_gpu_refuses_what_it_has_no_step_for() {
     let err = run(&prefactored).expect_err("symplectic only").to_string();
     assert!(err.contains("symplectic") && !err.contains('\n'), "{err}");
 }
+
+/// The probe on the material's surface compliance (the viewer's contact): the tools change only
+/// the load, so the GPU's state stays there between the script's actions, the guard reading the
+/// kernel's figures once a tick. The same trajectory and force as the CPU's.
+#[test]
+fn the_state_stays_on_the_gpu_under_the_surface_probe() {
+    if tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none() {
+        eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
+        return;
+    }
+    let pressed = |model: &str, nodes: usize, compute: &str| -> Script {
+        serde_json::from_value(serde_json::json!({
+            "object": "A", "model": model, "compute": compute, "nodes": nodes,
+            "actions": [
+                { "probe": { "at": [0.03, 0.05, 0.1], "direction": [0, 0, -1], "radius": 0.015, "depth": 0.004,
+                             "duration_s": 0.05, "samples": 4 } },
+                { "wait": { "duration_s": 0.05 } }
+            ]
+        }))
+        .expect("a valid script")
+    };
+    for (model, nodes) in [("hex", 8), ("fem-linear", 11)] {
+        let cpu = run(&pressed(model, nodes, "cpu")).expect("the CPU run");
+        let gpu = run(&pressed(model, nodes, "gpu")).expect("the GPU run");
+        assert_eq!(gpu.steps, cpu.steps);
+        assert!(gpu.blow_ups.is_empty() && cpu.blow_ups.is_empty(), "{:?} {:?}", gpu.blow_ups, cpu.blow_ups);
+        let scale = cpu.events.iter().map(|e| e.max_displacement_m).fold(0.0, f64::max);
+        let apart = final_positions(&cpu)
+            .iter()
+            .zip(final_positions(&gpu))
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0, f64::max);
+        assert!(scale > 1e-3, "{model} {nodes}^3 moved only {scale} m");
+        assert!(apart <= TOLERANCE * scale, "{model} {nodes}^3: the runs part by {apart} m of {scale} m");
+        let (f_cpu, f_gpu) = (cpu.force_depth.last().expect("samples"), gpu.force_depth.last().expect("samples"));
+        assert!((f_cpu.force_n - f_gpu.force_n).abs() <= 1e-6 * f_cpu.force_n.abs(), "{f_cpu:?} {f_gpu:?}");
+    }
+}
+
+/// A blow-up on the GPU, its state never brought back by a tool, is caught by the kernel's figures
+/// of the step: a 1e9 N pull stops the run as on the CPU.
+#[test]
+fn the_guard_catches_a_blow_up_on_the_gpu() {
+    if tissue_sim::gpu::ComputeDevice::open().is_err() {
+        return; // the missing adapter's own error is the CLI test's
+    }
+    let script: Script = serde_json::from_value(serde_json::json!({
+        "object": "A", "model": "hex", "compute": "gpu", "clamp": "A_clamped_ax3_F1000000000",
+        "actions": [ { "wait": { "duration_s": 0.5 } } ]
+    }))
+    .expect("a valid script");
+    let err = run(&script).expect_err("a persistent blow-up").to_string();
+    assert!(err.contains("blow-ups in a row"), "{err}");
+}
+
+/// The kernel's guard figures of a step (summed over workgroups in f32) are the state's: its
+/// kinetic energy and largest displacement component, as the CPU computes them once the state
+/// is brought back.
+#[test]
+fn the_gpu_guard_figures_are_the_states() {
+    use tissue_sim::mechanics::{cases::LoadCase, grid::Grid, material::Material};
+    use tissue_sim::sim::{Integrator, Model, Tissue};
+    let Ok(gpu) = tissue_sim::gpu::ComputeDevice::open() else {
+        return; // the missing adapter's own error is the CLI test's
+    };
+    for model in ["hex", "fem-linear"] {
+        let model = Model::ALL.into_iter().find(|m| m.name() == model).expect("a model");
+        let grid = Grid::new(9).expect("grid");
+        let mut inner = model.build_undamped_on(grid, &Material::object_a(), None).expect("built");
+        inner.apply_case(&LoadCase::clamped(&grid, "A", 3, 1.0));
+        let mut tissue = tissue_sim::gpu::GpuTissue::new(&gpu, inner).expect("on the GPU");
+        let dt = 0.5 * tissue.explicit_dt_limit();
+        for _ in 0..200 {
+            tissue.step(Integrator::Symplectic, dt).expect("a step");
+        }
+        let health = tissue.step_health().expect("on the GPU").expect("read");
+        tissue.sync().expect("brought back");
+        let largest = (0..grid.num_nodes())
+            .flat_map(|p| (0..3).map(move |c| (p, c)))
+            .map(|(p, c)| (tissue.x()[c][p] - grid.position(p)[c]).abs())
+            .fold(0.0, f64::max);
+        let energy = tissue.kinetic_energy();
+        assert!(energy > 0.0 && largest > 0.0, "{model:?}: {energy} J, {largest} m");
+        assert!((health.kinetic_energy_j - energy).abs() <= 1e-5 * energy, "{model:?}: {health:?} vs {energy} J");
+        assert!(
+            (health.largest_displacement_m - largest).abs() <= 1e-6 * largest,
+            "{model:?}: {health:?} vs {largest} m"
+        );
+        assert!(tissue.step_health().is_none(), "the state is here after a sync");
+    }
+}

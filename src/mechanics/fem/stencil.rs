@@ -12,7 +12,7 @@
 //! Two layouts: interleaved (`3 node + component`, [`Stencil::apply`]) and component-wise
 //! (`u[c][node]`, [`Stencil::apply_components`], the running FEM's state). In the second, the
 //! nodes of a grid row that are inside along x share one class and read their neighbours at
-//! the same index steps, so with AVX2 four of them are summed at a time; every node's sum is
+//! the same index steps, so with AVX2 eight (or four) of them are summed at a time; every node's sum is
 //! the same sequence of operations in both layouts and on both paths, so the bits are the same.
 
 use super::element::{ElementStiffness, NODE_SIDES};
@@ -308,57 +308,76 @@ fn inside_run(taps: &[Tap], u: [&[f64]; 3], from: usize, out: [&mut [f64]; 3]) {
     }
 }
 
-/// [`inside_run`] four nodes at a time (at least four), the last four overlapping the ones
-/// before where the run is not a multiple of four (the same sums written twice). No fused
-/// multiply-add, so every node's sum has the bits of [`row_sum`].
+/// [`inside_run`] eight nodes at a time (two registers, each of a tap's entries broadcast once
+/// for both), then four, the last group overlapping the ones before where the run is not a
+/// multiple of four (the same sums written twice); at least four nodes. No fused multiply-add,
+/// so every node's sum has the bits of [`row_sum`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn row_avx2(taps: &[Tap], u: [&[f64]; 3], from: usize, out: [&mut [f64]; 3]) {
-    use std::arch::x86_64::{
-        _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_setzero_pd, _mm256_storeu_pd,
-    };
     let len = out[0].len();
     debug_assert!(len >= 4 && out.iter().all(|o| o.len() == len));
     let [o0, o1, o2] = out;
     let mut s = 0;
-    loop {
+    while s + 8 <= len {
+        // SAFETY: the caller's CPU supports AVX2 (this function's own feature).
+        unsafe { group_avx2::<2>(taps, u, from, s, [&mut *o0, &mut *o1, &mut *o2]) };
+        s += 8;
+    }
+    while s < len {
         let start = s.min(len - 4);
-        let p = from + start;
-        let (mut a0, mut a1, mut a2) = (_mm256_setzero_pd(), _mm256_setzero_pd(), _mm256_setzero_pd());
-        for t in taps {
-            let q = p.wrapping_add_signed(t.delta);
-            // The four neighbours of one tap are contiguous: bounds-checked once as slices.
-            let (x, y, z) = (&u[0][q..q + 4], &u[1][q..q + 4], &u[2][q..q + 4]);
-            // SAFETY: each slice holds exactly four values, just checked.
-            let (x, y, z) =
-                unsafe { (_mm256_loadu_pd(x.as_ptr()), _mm256_loadu_pd(y.as_ptr()), _mm256_loadu_pd(z.as_ptr())) };
-            let b = &t.block;
-            macro_rules! m {
-                ($i:expr, $v:expr) => {
-                    _mm256_mul_pd(_mm256_set1_pd(b[$i]), $v)
-                };
+        // SAFETY: as above.
+        unsafe { group_avx2::<1>(taps, u, from, start, [&mut *o0, &mut *o1, &mut *o2]) };
+        s = start + 4;
+    }
+}
+
+/// The rows of the `4 V` nodes `from + start..` into `out[..][start..]` ([`row_avx2`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn group_avx2<const V: usize>(taps: &[Tap], u: [&[f64]; 3], from: usize, start: usize, out: [&mut [f64]; 3]) {
+    use std::arch::x86_64::{
+        __m256d, _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_setzero_pd, _mm256_storeu_pd,
+    };
+    let p = from + start;
+    let mut acc: [[__m256d; 3]; V] = [[_mm256_setzero_pd(); 3]; V];
+    for t in taps {
+        let q = p.wrapping_add_signed(t.delta);
+        // The 4 V neighbours of one tap are contiguous: bounds-checked once as slices.
+        let (x, y, z) = (&u[0][q..q + 4 * V], &u[1][q..q + 4 * V], &u[2][q..q + 4 * V]);
+        let b = &t.block;
+        macro_rules! m {
+            ($i:expr, $v:expr) => {
+                _mm256_mul_pd(_mm256_set1_pd(b[$i]), $v)
+            };
+        }
+        macro_rules! a {
+            ($p:expr, $q:expr) => {
+                _mm256_add_pd($p, $q)
+            };
+        }
+        for (w, acc) in acc.iter_mut().enumerate() {
+            // SAFETY: each slice holds exactly 4 V values, just checked, and `4 w + 4 <= 4 V`.
+            let (x, y, z) = unsafe {
+                (
+                    _mm256_loadu_pd(x.as_ptr().add(4 * w)),
+                    _mm256_loadu_pd(y.as_ptr().add(4 * w)),
+                    _mm256_loadu_pd(z.as_ptr().add(4 * w)),
+                )
+            };
+            let rows = pattern_rows!(t.pattern, x, y, z, m, a);
+            for (a, r) in acc.iter_mut().zip(rows) {
+                *a = _mm256_add_pd(*a, r);
             }
-            macro_rules! a {
-                ($p:expr, $q:expr) => {
-                    _mm256_add_pd($p, $q)
-                };
-            }
-            let [r0, r1, r2] = pattern_rows!(t.pattern, x, y, z, m, a);
-            a0 = _mm256_add_pd(a0, r0);
-            a1 = _mm256_add_pd(a1, r1);
-            a2 = _mm256_add_pd(a2, r2);
         }
-        let (d0, d1, d2) = (&mut o0[start..start + 4], &mut o1[start..start + 4], &mut o2[start..start + 4]);
-        // SAFETY: each slice holds exactly four values, just checked.
-        unsafe {
-            _mm256_storeu_pd(d0.as_mut_ptr(), a0);
-            _mm256_storeu_pd(d1.as_mut_ptr(), a1);
-            _mm256_storeu_pd(d2.as_mut_ptr(), a2);
+    }
+    for (c, o) in out.into_iter().enumerate() {
+        let d = &mut o[start..start + 4 * V];
+        for (w, acc) in acc.iter().enumerate() {
+            // SAFETY: `d` holds exactly 4 V values, just checked, and `4 w + 4 <= 4 V`.
+            unsafe { _mm256_storeu_pd(d.as_mut_ptr().add(4 * w), acc[c]) };
         }
-        if start + 4 >= len {
-            break;
-        }
-        s += 4;
     }
 }
 
@@ -388,9 +407,9 @@ mod tests {
     #[test]
     fn component_wise_is_interleaved_bit_for_bit() {
         let material = Material::object_b();
-        // Runs inside along x of 0, 1, 3, 4, 6, 9 and 14 nodes (the AVX2 path from 4, its last
-        // four overlapping from 6), and 16^3 split over the pool.
-        for n in [2, 3, 5, 6, 8, 11, 16] {
+        // Runs inside along x of 0, 1, 3, 4, 6, 8, 9, 11 and 14 nodes (the AVX2 path from 4, in
+        // groups of eight from 8, the last four overlapping from 6), and 16^3 split over the pool.
+        for n in [2, 3, 5, 6, 8, 10, 11, 13, 16] {
             let grid = Grid::new(n).unwrap();
             let fem = super::super::FemModel::new(grid, &material);
             let stencil = Stencil::new(&grid, &fem.ke);

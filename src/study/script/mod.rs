@@ -351,6 +351,8 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     let last = script.actions.len().saturating_sub(1);
     for (i, action) in script.actions.iter().enumerate() {
         let kind = run_action(i, action, &mut sim, &mut out)?;
+        // A state on the GPU comes back at the end of each action (the event's positions).
+        sim.sync().map_err(|e| anyhow::anyhow!("script: action {i}: {e}"))?;
         let x = sim.tissue.x();
         let position = |p: usize| -> [f64; 3] { std::array::from_fn(|c| x[c][p]) };
         let max_displacement_m = rest
