@@ -5,6 +5,10 @@
 // roles each step): it computes the node's force from `u` and writes
 // `v' = (v + dt ((f + f_ext) / m - c v)) free` and `u' = u + dt v'`.
 // Once a tick, `guard_figures` sums what the CPU's guard needs from the state into a few bytes.
+// After a step, `drag_step` takes the dragging spring's split step on its node (one thread).
+//
+// Each state buffer holds `6 nn` values of state, then two guard figures per workgroup, then
+// the held node's velocity change in the last step (3 values, for the force on the hand).
 
 struct Family {
     // Linear node offset of a pair `(p, p + offset)`; pairs exist for `p < len`.
@@ -23,6 +27,12 @@ struct Params {
     families: u32,
     dt: f32,
     family: array<Family, 16>,
+    // The dragging spring (tissue-sim's `drag_velocity_change`): its target as a displacement
+    // from the node's rest position (xyz) and its stiffness over the node's mass (w, 1/s^2).
+    drag: vec4<f32>,
+    // The held node (`nn` or more: none) and the spring's damping over the node's mass, 1/s.
+    drag_node: u32,
+    drag_damping: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -119,12 +129,40 @@ fn stencil_step(@builtin(global_invocation_id) id: vec3<u32>) {
     advance(q, -ku);
 }
 
+// Where the held node's velocity change is kept, after the state and the guard's figures.
+fn drag_slot() -> u32 {
+    return 6u * params.nn + 2u * ((params.nn + 63u) / 64u);
+}
+
+// Backward Euler on the held node's spring and damper after the step, in `next`:
+// `dv (1 + dt c + dt^2 k) = dt (k (target - u) - c v)`, `v += dv`, `u += dt dv` (each component
+// only where free); `dv` is kept for the force on the hand.
+@compute @workgroup_size(1)
+fn drag_step() {
+    let p = params.drag_node;
+    let nn = params.nn;
+    if p >= nn {
+        return;
+    }
+    let dt = params.dt;
+    let k = params.drag.w;
+    let c = params.drag_damping;
+    let scale = dt / (1.0 + dt * c + dt * dt * k);
+    for (var i = 0u; i < 3u; i++) {
+        let at = i * nn + p;
+        let dv = scale * (k * (params.drag[i] - next[at]) - c * next[3u * nn + at]) * coef[2u * nn + at];
+        next[3u * nn + at] += dv;
+        next[at] += dt * dv;
+        next[drag_slot() + i] = dv;
+    }
+}
+
 var<workgroup> part: array<vec2<f32>, 64>;
 
 // The guard's figures of the state in `state` (run once a tick, not every step): for each
 // workgroup of nodes, the sum of their kinetic energies (NaN where a velocity is) and their
 // largest displacement component, written after the state in `next` (two values a workgroup;
-// the next step overwrites only the state before them).
+// the next step overwrites only the state before them), and the held node's velocity change.
 @compute @workgroup_size(64)
 fn guard_figures(
     @builtin(global_invocation_id) id: vec3<u32>,
@@ -155,5 +193,9 @@ fn guard_figures(
         let at = 6u * nn + 2u * group.x;
         next[at] = part[0].x;
         next[at + 1u] = part[0].y;
+    }
+    // The held node's velocity change of the step that left `state`, with the figures.
+    if id.x < 3u {
+        next[drag_slot() + id.x] = state[drag_slot() + id.x];
     }
 }

@@ -248,11 +248,21 @@ impl Loop {
         if !sim.tissue.state_on_device() || drawn_at.is_some_and(|t| t.elapsed() < DRAW_PERIOD) {
             return;
         }
-        if let Err(e) = sim.sync() {
-            self.message = Some(format!("t = {:.3} s: {e} Paused: Reset to go on.", sim.time_s));
-            self.paused = true;
+        if let Err(b) = sim.sync() {
+            self.blew_up(&b);
         }
         *drawn_at = Some(Instant::now());
+    }
+
+    /// Says what blew up; pauses where the guard gave up.
+    fn blew_up(&mut self, b: &crate::sim::BlowUp) {
+        self.message = Some(if b.fatal {
+            format!("t = {:.3} s: {} Paused: change a setting, use a tool or Reset to go on.", b.time_s, b.message)
+        } else {
+            format!("t = {:.3} s: {}", b.time_s, b.message)
+        });
+        self.paused = b.fatal;
+        self.owed = 0.0;
     }
 
     /// The probe of the running simulation on the kept surface compliance, if any.
@@ -395,16 +405,7 @@ fn run(
         }
         while !state.paused && state.owed >= sim.dt * 0.999 {
             if let Err(b) = sim.step() {
-                state.message = Some(if b.fatal {
-                    format!(
-                        "t = {:.3} s: {} Paused: change a setting, use a tool or Reset to go on.",
-                        b.time_s, b.message
-                    )
-                } else {
-                    format!("t = {:.3} s: {}", b.time_s, b.message)
-                });
-                state.paused = b.fatal;
-                state.owed = 0.0;
+                state.blew_up(&b);
                 break;
             }
             state.owed -= sim.dt;

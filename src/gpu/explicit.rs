@@ -41,6 +41,30 @@ struct ParamsGpu {
     families: u32,
     dt: f32,
     family: [FamilyGpu; MAX_FAMILIES],
+    /// The dragging spring: target displacement (xyz) and stiffness over the node's mass (w).
+    drag: [f32; 4],
+    /// The held node (`NO_DRAG`: none).
+    drag_node: u32,
+    /// The spring's damping over the node's mass, 1/s.
+    drag_damping: f32,
+    pad: [u32; 2],
+}
+
+/// `drag_node` where nothing is dragged.
+const NO_DRAG: u32 = u32::MAX;
+
+/// The dragging spring's split step on the GPU: the held node, its target as a displacement
+/// from rest, m, and the spring's stiffness and damping over the node's mass (1/s^2, 1/s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GpuDrag {
+    /// The held node.
+    pub node: usize,
+    /// Where the spring pulls it, as a displacement from its rest position, m.
+    pub target_displacement: [f64; 3],
+    /// Stiffness over the node's mass, 1/s^2.
+    pub stiffness_per_mass: f64,
+    /// Damping over the node's mass, 1/s.
+    pub damping_per_mass: f64,
 }
 
 /// A model's explicit step on the GPU.
@@ -64,6 +88,10 @@ pub struct ExplicitKernel {
     step: wgpu::ComputePipeline,
     /// The guard's figures of a state (the shader's `guard_figures`).
     guard: wgpu::ComputePipeline,
+    /// The dragging spring's split step (the shader's `drag_step`).
+    drag: wgpu::ComputePipeline,
+    /// Whether `params` changed since they were last written.
+    params_stale: bool,
     /// Host copies: the state (`u` then `v`, component-major) and the load.
     host_state: Vec<f32>,
     host_load: Vec<f32>,
@@ -102,6 +130,10 @@ fn operator(form: &ExplicitForm) -> Result<(ParamsGpu, Vec<f32>), GpuError> {
         families: 0,
         dt: 0.0,
         family: [bytemuck::Zeroable::zeroed(); MAX_FAMILIES],
+        drag: [0.0; 4],
+        drag_node: NO_DRAG,
+        drag_damping: 0.0,
+        pad: [0; 2],
     };
     let mut op = Vec::new();
     match &form.force {
@@ -129,11 +161,9 @@ fn operator(form: &ExplicitForm) -> Result<(ParamsGpu, Vec<f32>), GpuError> {
     Ok((params, op))
 }
 
-/// The bind group layout, the step's pipeline of a force form and the guard's.
-fn pipelines(
-    device: &wgpu::Device,
-    force: &ForceForm,
-) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline, wgpu::ComputePipeline) {
+/// The bind group layout, and the pipelines of the step of a force form, the guard's figures and
+/// the drag's step.
+fn pipelines(device: &wgpu::Device, force: &ForceForm) -> (wgpu::BindGroupLayout, [wgpu::ComputePipeline; 3]) {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("explicit_step.wgsl"),
         source: wgpu::ShaderSource::Wgsl(std::borrow::Cow::Borrowed(EXPLICIT_STEP_WGSL)),
@@ -175,7 +205,7 @@ fn pipelines(
         ForceForm::Springs(_) => "lattice_step",
         ForceForm::Stencil(_) => "stencil_step",
     });
-    (layout, step, pipeline("guard_figures"))
+    (layout, [step, pipeline("guard_figures"), pipeline("drag_step")])
 }
 
 impl ExplicitKernel {
@@ -203,7 +233,9 @@ impl ExplicitKernel {
         }
         let (params, op) = operator(form)?;
         let limit = device.limits().max_storage_buffer_binding_size as usize;
-        let health_len = 2 * groups(nn) as usize;
+        // The guard's two figures a workgroup, then the held node's velocity change (and one
+        // spare value).
+        let health_len = 2 * groups(nn) as usize + 4;
         if 4 * op.len().max(6 * nn + health_len) > limit {
             return Err(GpuError::Unsupported(format!("{nn} nodes need more than this GPU's {limit}-byte buffers")));
         }
@@ -235,7 +267,7 @@ impl ExplicitKernel {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let (layout, step, guard) = pipelines(device, &form.force);
+        let (layout, [step, guard, drag]) = pipelines(device, &form.force);
         let bind_groups = [0, 1].map(|i| {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("explicit step"),
@@ -264,6 +296,8 @@ impl ExplicitKernel {
             bind_groups,
             step,
             guard,
+            drag,
+            params_stale: false,
             host_state,
             host_load,
             host_health,
@@ -317,20 +351,40 @@ impl ExplicitKernel {
         self.gpu.queue.write_buffer(&self.coef, 0, bytemuck::cast_slice(&coefficients(form)));
     }
 
-    /// Submits `steps` steps of `dt` (returns before they finish).
+    /// Holds a node by the dragging spring after each step from now (`None`: lets go).
+    pub fn set_drag(&mut self, drag: Option<GpuDrag>) {
+        let (node, target, k, c) = match drag {
+            Some(d) => (d.node as u32, d.target_displacement, d.stiffness_per_mass, d.damping_per_mass),
+            None => (NO_DRAG, [0.0; 3], 0.0, 0.0),
+        };
+        let drag = [target[0] as f32, target[1] as f32, target[2] as f32, k as f32];
+        if (self.params.drag_node, self.params.drag, self.params.drag_damping) != (node, drag, c as f32) {
+            (self.params.drag_node, self.params.drag, self.params.drag_damping) = (node, drag, c as f32);
+            self.params_stale = true;
+        }
+    }
+
+    /// Submits `steps` steps of `dt` (returns before they finish), each followed by the drag's
+    /// split step where a node is held.
     pub fn run(&mut self, dt: f64, steps: usize) {
-        if self.params.dt != dt as f32 {
+        if self.params.dt != dt as f32 || self.params_stale {
             self.params.dt = dt as f32;
+            self.params_stale = false;
             self.gpu.queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
         }
+        let dragged = self.params.drag_node != NO_DRAG;
         let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         {
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None });
-            pass.set_pipeline(&self.step);
             for _ in 0..steps {
                 pass.set_bind_group(0, &self.bind_groups[self.current], &[]);
+                pass.set_pipeline(&self.step);
                 pass.dispatch_workgroups(groups(self.nn), 1, 1);
+                if dragged {
+                    pass.set_pipeline(&self.drag);
+                    pass.dispatch_workgroups(1, 1, 1);
+                }
                 self.current = 1 - self.current;
             }
         }
@@ -357,8 +411,9 @@ impl ExplicitKernel {
     }
 
     /// Waits for the steps submitted and reads the guard's figures of the state they left: the
-    /// kinetic energy, J (NaN where a velocity is), and the largest displacement component, m.
-    /// One dispatch sums them per workgroup, and only those sums come back.
+    /// kinetic energy, J (NaN where a velocity is), and the largest displacement component, m;
+    /// and the held node's velocity change in the last step. One dispatch sums them per
+    /// workgroup, and only those sums come back.
     pub fn read_health(&mut self) -> Result<crate::sim::tissue::StepHealth, GpuError> {
         let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         {
@@ -371,13 +426,20 @@ impl ExplicitKernel {
         self.gpu.queue.submit([encoder.finish()]);
         let from = (&self.state[1 - self.current], (4 * 6 * self.nn) as u64);
         read_into(&self.gpu, &self.mapped, from, &self.health_staging, &mut self.host_health)?;
+        let (figures, held) = self.host_health.split_at(self.host_health.len() - 4);
         let (mut energy, mut largest) = (0.0f64, 0.0f64);
-        for pair in self.host_health.chunks_exact(2) {
+        for pair in figures.chunks_exact(2) {
             energy += f64::from(pair[0]);
-            // NaN is kept: `max` would drop it.
-            largest = if pair[1].is_nan() { f64::NAN } else { largest.max(f64::from(pair[1])) };
+            // A NaN is kept (`max` would drop it).
+            largest = if largest.is_nan() || pair[1].is_nan() { f64::NAN } else { largest.max(f64::from(pair[1])) };
         }
-        Ok(crate::sim::tissue::StepHealth { kinetic_energy_j: energy, largest_displacement_m: largest })
+        let held_velocity_change_m_s =
+            if self.params.drag_node == NO_DRAG { [0.0; 3] } else { std::array::from_fn(|c| f64::from(held[c])) };
+        Ok(crate::sim::tissue::StepHealth {
+            kinetic_energy_j: energy,
+            largest_displacement_m: largest,
+            held_velocity_change_m_s,
+        })
     }
 
     /// Waits until the GPU has finished everything submitted.

@@ -1,9 +1,12 @@
 //! Layer 3b, the GPU's step: the lattices' and the linear FEM's symplectic Euler step as wgpu
 //! compute shaders (`shaders/explicit_step.wgsl`), in f32, behind the same seam as the CPU's
-//! ([`crate::sim::Tissue`]). The simulation, its tools and its guard do not know which runs.
+//! ([`crate::sim::Tissue`]). The state stays on the GPU between steps: the simulation asks for it
+//! only where it reads nodes ([`crate::sim::Tissue::sync`]), its guard reads the kernel's
+//! figures of a step, and the drag's split step runs there too.
 //!
 //! - [`device`]: an adapter that computes, or a one-line reason why there is none.
-//! - [`explicit`]: the kernel: buffers, pipelines, steps, state in and out.
+//! - [`explicit`]: the kernel: buffers, pipelines, steps, the drag's step, the guard's figures,
+//!   state in and out.
 //! - [`tissue`]: [`GpuTissue`], a CPU tissue whose symplectic steps run on the GPU.
 //!
 //! May use: [`crate::sim`], [`crate::response`], [`crate::mechanics`], [`crate::io`].

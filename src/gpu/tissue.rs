@@ -1,20 +1,20 @@
 //! [`GpuTissue`]: a CPU tissue whose symplectic Euler steps run on the GPU, where the state stays
 //! between steps. The CPU model keeps a copy that follows at [`Tissue::sync`] (to draw it, or for
-//! a tool that reads nodes) and before anything writes it (tools, contact, the guard's restore,
-//! an implicit step, new parameters); then the GPU takes the state again. The guard reads the
+//! a tool that reads nodes) and before anything writes it (node contact, the guard's restore, an
+//! implicit step, new parameters); then the GPU takes the state again. The guard reads the
 //! kernel's figures of the last step instead of the state. A load sends only the nodes a tool
-//! changed. Everything else (masses, forces for contact, parameters, implicit steps) is the CPU
+//! changed, and the drag's split step runs on the GPU after each step. Everything else (masses, forces for contact, parameters, implicit steps) is the CPU
 //! model's.
 
 use super::device::{ComputeDevice, GpuError};
-use super::explicit::ExplicitKernel;
+use super::explicit::{ExplicitKernel, GpuDrag};
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::msm::MsmParams;
 use crate::response::damping::Damping;
 use crate::sim::explicit_form::ExplicitForm;
 use crate::sim::tissue::StepHealth;
-use crate::sim::{Integrator, Tissue};
+use crate::sim::{DRAG_DAMPING, DRAG_STIFFNESS, Integrator, Tissue};
 
 /// A tissue stepped on the GPU.
 #[derive(Debug)]
@@ -229,6 +229,19 @@ impl Tissue for GpuTissue {
         self.inner.f_ext_mut()
     }
     fn state_on_device(&self) -> bool {
+        true
+    }
+    fn hold_by_drag(&mut self, drag: Option<(usize, [f64; 3])>) -> bool {
+        let drag = drag.map(|(node, target)| {
+            let m = self.inner.node_mass(node);
+            GpuDrag {
+                node,
+                target_displacement: std::array::from_fn(|c| target[c] - self.rest[c][node]),
+                stiffness_per_mass: DRAG_STIFFNESS / m,
+                damping_per_mass: DRAG_DAMPING / m,
+            }
+        });
+        self.kernel.set_drag(drag);
         true
     }
     fn sync(&mut self) -> Result<(), String> {

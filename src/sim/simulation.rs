@@ -4,8 +4,9 @@
 //! Where the tissue's state stays on the GPU between steps ([`Tissue::state_on_device`]), the
 //! guard reads the GPU's figures of a step once a tick ([`super::TICK_S`]) instead of the state
 //! every step, the last good state is kept where the state comes back ([`Simulation::sync`], to
-//! draw or read it), and a tool that reads or moves nodes (the drag, the model's own node
-//! contact) brings the state back every step.
+//! draw or read it), the drag's split step runs there (its force on the hand comes back with the
+//! guard's figures), and only the model's own node contact (or a drag on a fixed node) brings the
+//! state back every step.
 
 use super::integrator::{DEFAULT_DYNAMIC_BUDGET, Integrator, StepLimit, choose_step};
 use super::msm_tissue::MsmTissue;
@@ -67,13 +68,17 @@ pub struct Simulation {
     tool_loaded: MarkedNodes,
     /// Force of the tissue on the tool, newtons (last step).
     pub tool_force: [f64; 3],
-    /// Last good state (positions, velocities, time), refreshed every 100 healthy steps.
+    /// Last good state (positions, velocities, time), refreshed every 100 healthy steps (for a
+    /// state on the GPU, where it comes back: [`Simulation::sync`] and any step that brings it).
     good_x: [Vec<f64>; 3],
     good_v: [Vec<f64>; 3],
     good_time: Option<f64>,
     steps_since_good: usize,
     /// Steps since the guard last checked a state that stays on the GPU.
     steps_unchecked: usize,
+    /// The node the GPU holds by the drag's split step, if any (its force on the hand comes
+    /// with the guard's figures).
+    device_drag: Option<usize>,
     rest: [Vec<f64>; 3],
     /// Nodes on the cube's surface: the only ones the probe touches.
     surface: Vec<usize>,
@@ -122,6 +127,7 @@ impl Simulation {
             good_time: None,
             steps_since_good: 0,
             steps_unchecked: 0,
+            device_drag: None,
             rest,
             surface: (0..nn).filter(|&p| grid.on_boundary(p)).collect(),
             surface_probe: None,
@@ -230,12 +236,25 @@ impl Simulation {
 
     /// Advances one step; on a blow-up restores the last good state and says why.
     pub fn step(&mut self) -> Result<(), BlowUp> {
+        // Where the state stays on the GPU, it comes back every step only where something here
+        // reads or moves nodes: an implicit step (on the CPU's model, with the anchored drag),
+        // the node contact, a drag on a fixed node. The drag's split step on a free node runs
+        // there under symplectic Euler.
+        let on_device = self.tissue.state_on_device();
+        let implicit = self.integrator != Integrator::Symplectic;
+        let mut stepped = if on_device && implicit { self.tissue.sync() } else { Ok(()) };
         self.apply_tool_load();
         let anchored = self.anchor_drag();
-        // A state on the GPU comes back every step only for a tool that reads or moves nodes.
-        let on_device = self.tissue.state_on_device();
-        let reads_nodes = on_device && (self.node_contact() || matches!(self.tool, Tool::Drag { .. }));
-        let mut stepped = if reads_nodes { self.tissue.sync() } else { Ok(()) };
+        let drag = match self.tool {
+            Tool::Drag { node, target } if !implicit && self.tissue.free()[node] != 0.0 => Some((node, target)),
+            _ => None,
+        };
+        self.device_drag = (on_device && self.tissue.hold_by_drag(drag)).then_some(drag).flatten().map(|(p, _)| p);
+        let drags_here = matches!(self.tool, Tool::Drag { .. }) && self.device_drag.is_none();
+        let reads_nodes = on_device && (self.node_contact() || drags_here);
+        if stepped.is_ok() && reads_nodes {
+            stepped = self.tissue.sync();
+        }
         if self.node_contact() {
             let x = self.tissue.x();
             for &p in &self.surface {
@@ -253,7 +272,7 @@ impl Simulation {
         if stepped.is_ok() {
             if anchored {
                 self.anchored_drag_force();
-            } else {
+            } else if self.device_drag.is_none() {
                 self.drag_step();
             }
         }
@@ -262,29 +281,54 @@ impl Simulation {
         }
         self.enforce_contact();
         self.time_s += self.dt;
-        // Where the state is here, the guard reads it every step; on the GPU, the figures of the
-        // step that ends a tick.
+        // The guard reads a state that is here every step; one left on the GPU, by the figures
+        // of the step that ends a tick.
+        let here = !on_device || implicit || reads_nodes;
         self.steps_unchecked += 1;
-        let checks = !on_device || self.steps_unchecked as f64 * self.dt >= super::TICK_S * (1.0 - 1e-9);
-        let mut unhealthy = None;
-        if stepped.is_ok() && checks {
-            self.steps_unchecked = 0;
-            match self.tissue.step_health() {
-                None => unhealthy = self.unhealthy(),
-                Some(Ok(health)) => unhealthy = self.unhealthy_figures(health),
-                Some(Err(e)) => stepped = Err(e),
-            }
-        }
-        if stepped.is_ok() && unhealthy.is_none() {
-            if self.time_s > self.last_blow_up_s {
-                self.recoveries = 0;
-            }
-            self.steps_since_good += 1;
-            if !on_device && (self.good_time.is_none() || self.steps_since_good >= 100) {
-                self.keep_good();
-            }
+        if stepped.is_ok() && !here && self.steps_unchecked as f64 * self.dt < super::TICK_S * (1.0 - 1e-9) {
             return Ok(());
         }
+        self.steps_unchecked = 0;
+        let unhealthy = match stepped.and_then(|()| self.check()) {
+            Ok(unhealthy) => unhealthy,
+            Err(e) => return Err(self.blow_up(Err(e), None)),
+        };
+        if unhealthy.is_some() {
+            return Err(self.blow_up(Ok(()), unhealthy));
+        }
+        if self.time_s > self.last_blow_up_s {
+            self.recoveries = 0;
+        }
+        self.steps_since_good += 1;
+        if here && (self.good_time.is_none() || self.steps_since_good >= 100) {
+            self.keep_good();
+        }
+        Ok(())
+    }
+
+    /// The guard: why the state now is not good, read where it lives (the GPU's figures of its
+    /// last step, or, for a cube held nowhere, whose motion as a whole only the state shows,
+    /// the state brought back).
+    fn check(&mut self) -> Result<Option<Unhealthy>, String> {
+        let held = self.tissue.free().contains(&0.0);
+        match self.tissue.step_health() {
+            Some(health) if held => {
+                let health = health?;
+                self.device_drag_force(health);
+                Ok(self.unhealthy_figures(health))
+            }
+            Some(health) => {
+                self.device_drag_force(health?);
+                self.tissue.sync()?;
+                Ok(self.unhealthy())
+            }
+            None => Ok(self.unhealthy()),
+        }
+    }
+
+    /// After a failed step or an unhealthy state: restores the last good state (or rest after
+    /// [`MAX_RECOVERIES`] in a row) and says why.
+    fn blow_up(&mut self, stepped: Result<(), String>, unhealthy: Option<Unhealthy>) -> BlowUp {
         let message = self.diagnose(stepped, unhealthy);
         let time_s = self.time_s;
         if time_s > self.last_blow_up_s {
@@ -303,7 +347,7 @@ impl Simulation {
         } else {
             message
         };
-        Err(BlowUp { time_s, message, fatal })
+        BlowUp { time_s, message, fatal }
     }
 
     /// The state now as the last good one.
@@ -317,17 +361,23 @@ impl Simulation {
         self.steps_since_good = 0;
     }
 
-    /// Brings the tissue's state back where its steps left it on the GPU (a no-op on the CPU),
-    /// to draw or read it; a healthy state brought back is kept as the last good one.
-    pub fn sync(&mut self) -> Result<(), String> {
-        if !self.tissue.state_on_device() {
+    /// Brings the tissue's state back where its steps left it on the GPU (nothing to do on the
+    /// CPU, or where it has not stepped since), to draw or read it, and checks it: a healthy
+    /// state is kept as the last good one, an unhealthy one is a blow-up as in
+    /// [`Simulation::step`].
+    pub fn sync(&mut self) -> Result<(), BlowUp> {
+        let Some(health) = self.tissue.step_health() else {
             return Ok(());
+        };
+        let unhealthy = health.map(|h| self.device_drag_force(h)).and_then(|()| self.tissue.sync());
+        match unhealthy.map(|()| self.unhealthy()) {
+            Ok(None) => {
+                self.keep_good();
+                Ok(())
+            }
+            Ok(unhealthy) => Err(self.blow_up(Ok(()), unhealthy)),
+            Err(e) => Err(self.blow_up(Err(e), None)),
         }
-        self.tissue.sync()?;
-        if self.unhealthy().is_none() {
-            self.keep_good();
-        }
-        Ok(())
     }
 
     /// What went wrong in a step that failed or left the state unhealthy, and what to change.
@@ -336,7 +386,7 @@ impl Simulation {
         let dt = crate::io::num(self.dt);
         if let Err(e) = stepped {
             return if self.tissue.state_on_device() && self.integrator == Integrator::Symplectic {
-                format!("the GPU's step failed ({e}); the state was reset")
+                format!("the GPU's step or its readback failed ({e}); the state was reset")
             } else {
                 format!("the implicit solve failed ({e}); the state was reset")
             };
@@ -389,7 +439,7 @@ impl Simulation {
     /// its rest position (bounded relative to the cube, not to some absolute size), or a kinetic
     /// energy of the whole mass moving at 10 m/s.
     ///
-    /// The guard runs every step, so its common case reads each array once (the positions twice
+    /// The guard runs every step on a state here, so its common case reads each array once (the positions twice
     /// for a cube held nowhere, whose mean shift comes first): a NaN or infinity fails the
     /// displacement's and the energy's comparisons too (both are written to fail on a NaN), and
     /// only a state that fails them is searched for one, to name the cause.
@@ -424,19 +474,25 @@ impl Simulation {
         })
     }
 
+    /// The force on the hand of the drag the GPU steps, `-m dv / dt` from its last step.
+    fn device_drag_force(&mut self, health: super::tissue::StepHealth) {
+        if let Some(node) = self.device_drag {
+            let m = self.tissue.node_mass(node);
+            self.tool_force = health.held_velocity_change_m_s.map(|d| -m * d / self.dt);
+        }
+    }
+
     /// The kinetic energy of a state that has run away, J.
     fn runaway_energy(&self) -> f64 {
         0.5 * self.tissue.total_mass() * RUNAWAY_SPEED_M_S * RUNAWAY_SPEED_M_S
     }
 
-    /// [`Simulation::unhealthy`] from the GPU's figures of a step: a NaN, a node more than the
-    /// cube's side from rest (checked here for a held cube only: one held nowhere may move as a
-    /// whole, which is checked where the state comes back), or a runaway energy.
+    /// [`Simulation::unhealthy`] from the GPU's figures of a step, for a held cube: a NaN, a node
+    /// more than the cube's side from rest, or a runaway energy.
     fn unhealthy_figures(&self, health: super::tissue::StepHealth) -> Option<Unhealthy> {
-        let held = self.tissue.free().contains(&0.0);
         if !(health.kinetic_energy_j.is_finite() && health.largest_displacement_m.is_finite()) {
             Some(Unhealthy::NonFinite)
-        } else if held && health.largest_displacement_m > crate::mechanics::grid::CUBE_SIDE_M {
+        } else if health.largest_displacement_m > crate::mechanics::grid::CUBE_SIDE_M {
             Some(Unhealthy::OutsideCube)
         } else if health.kinetic_energy_j > self.runaway_energy() {
             Some(Unhealthy::Energy)

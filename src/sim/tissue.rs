@@ -25,6 +25,9 @@ pub struct StepHealth {
     pub kinetic_energy_j: f64,
     /// The largest displacement component of any node from rest, m (NaN where one is).
     pub largest_displacement_m: f64,
+    /// The velocity change the dragging spring gave its node in the last step, where the device
+    /// steps the drag ([`Tissue::hold_by_drag`]), m/s; zero otherwise.
+    pub held_velocity_change_m_s: [f64; 3],
 }
 
 /// A tissue model the interactive simulation can step.
@@ -113,6 +116,13 @@ pub trait Tissue: Send + std::fmt::Debug {
     /// Brings the state back from where the steps left it (nothing to do on the CPU).
     fn sync(&mut self) -> Result<(), String> {
         Ok(())
+    }
+    /// Takes the dragging spring's split step ([`super::drag_velocity_change`]) on `node`
+    /// towards `target` after each symplectic step where the state lives (`None`: lets go), and
+    /// says whether it does: a tissue whose state is here leaves it to the caller.
+    fn hold_by_drag(&mut self, drag: Option<(usize, [f64; 3])>) -> bool {
+        let _ = drag;
+        false
     }
     /// Where the state is on another device: the guard's figures of its last step, read there
     /// (a few bytes, not the state). `None` where the state is here (the guard reads it).

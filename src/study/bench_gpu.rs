@@ -42,7 +42,10 @@ pub struct GpuScale {
     pub gpu_tick_readback_s: f64,
     /// The viewer's and `simulate`'s tick on the GPU: the simulation's 1 ms tick with the probe
     /// pressed 4 mm on the material's surface compliance, its loads sent every substep and the
-    /// guard's figures read once a tick, the state kept on the GPU ([`super::pressed`]), s.
+    /// guard's figures read once a tick, the state kept on the GPU ([`super::pressed`]), s. The
+    /// tissue is undamped (as above), so the held sphere's contact is not solved again: with a
+    /// damping ratio the viewer also solves it once a tick, on the CPU, whichever computes the
+    /// steps.
     pub sim_tick_s: f64,
     /// The same tick on the CPU, f64, on the physics pool (`cpu_threads` threads), s.
     pub cpu_tick_s: f64,

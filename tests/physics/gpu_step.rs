@@ -157,3 +157,46 @@ fn the_gpu_guard_figures_are_the_states() {
         assert!(tissue.step_health().is_none(), "the state is here after a sync");
     }
 }
+
+/// The drag's split step on the GPU (the state stays there): a top corner dragged and held moves
+/// the cube as on the CPU, and the hand feels the same force.
+#[test]
+fn the_gpu_steps_the_drag() {
+    if tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none() {
+        eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
+        return;
+    }
+    let dragged = |model: &str, nodes: usize, compute: &str| -> Script {
+        serde_json::from_value(serde_json::json!({
+            "object": "A", "model": model, "compute": compute, "nodes": nodes,
+            "actions": [
+                { "drag": { "node": nodes * nodes * nodes - 1, "to": [0.11, 0.1, 0.11], "duration_s": 0.03 } },
+                { "wait": { "duration_s": 0.03 } }
+            ]
+        }))
+        .expect("a valid script")
+    };
+    for (model, nodes) in [("hex", 8), ("fem-linear", 11)] {
+        let cpu = run(&dragged(model, nodes, "cpu")).expect("the CPU run");
+        let gpu = run(&dragged(model, nodes, "gpu")).expect("the GPU run");
+        assert!(gpu.blow_ups.is_empty() && cpu.blow_ups.is_empty(), "{:?} {:?}", gpu.blow_ups, cpu.blow_ups);
+        let scale = cpu.events.iter().map(|e| e.max_displacement_m).fold(0.0, f64::max);
+        let apart = final_positions(&cpu)
+            .iter()
+            .zip(final_positions(&gpu))
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0, f64::max);
+        assert!(scale > 5e-3, "{model} {nodes}^3 moved only {scale} m");
+        assert!(apart <= TOLERANCE * scale, "{model} {nodes}^3: the runs part by {apart} m of {scale} m");
+        for (a, b) in cpu.events.iter().zip(&gpu.events) {
+            let size = a.tool_force_n.iter().map(|f| f * f).sum::<f64>().sqrt();
+            let gap = (0..3).map(|c| (a.tool_force_n[c] - b.tool_force_n[c]).powi(2)).sum::<f64>().sqrt();
+            assert!(
+                size > 0.1 && gap <= 1e-3 * size,
+                "{model} {nodes}^3: {:?} vs {:?}",
+                a.tool_force_n,
+                b.tool_force_n
+            );
+        }
+    }
+}

@@ -351,8 +351,9 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     let last = script.actions.len().saturating_sub(1);
     for (i, action) in script.actions.iter().enumerate() {
         let kind = run_action(i, action, &mut sim, &mut out)?;
-        // A state on the GPU comes back at the end of each action (the event's positions).
-        sim.sync().map_err(|e| anyhow::anyhow!("script: action {i}: {e}"))?;
+        // A state on the GPU comes back at the end of each action (the event's positions), and
+        // is checked as a step is.
+        record_blow_up(sim.sync(), &mut out)?;
         let x = sim.tissue.x();
         let position = |p: usize| -> [f64; 3] { std::array::from_fn(|c| x[c][p]) };
         let max_displacement_m = rest
@@ -466,7 +467,13 @@ fn probe(
 /// One step; a blow-up is listed, and one the guard gave up on stops the script.
 fn step(sim: &mut Simulation, out: &mut Outcome) -> anyhow::Result<()> {
     out.steps += 1;
-    if let Err(b) = sim.step() {
+    record_blow_up(sim.step(), out)
+}
+
+/// A blow-up of a step or of a state brought back from the GPU is listed, and one the guard gave
+/// up on stops the script.
+fn record_blow_up(result: Result<(), crate::sim::BlowUp>, out: &mut Outcome) -> anyhow::Result<()> {
+    if let Err(b) = result {
         if b.fatal {
             anyhow::bail!("simulation stopped at t = {:.4} s: {}", b.time_s, b.message);
         }
