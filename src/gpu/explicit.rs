@@ -1,6 +1,6 @@
 //! The explicit step's kernel: a model's [`ExplicitForm`] in GPU buffers, its state in and out,
-//! any number of steps in one submission, and the guard's figures of the last step (a few bytes
-//! a workgroup, read without the state).
+//! steps recorded until something is written or read (then submitted together), and the guard's
+//! figures of the last step (a few bytes a workgroup, read without the state).
 //!
 //! The state on the GPU is the displacement from rest and the velocity, in f32 (the displacement
 //! rather than the position keeps f32's relative precision on what changes: a spring's length is
@@ -92,6 +92,9 @@ pub struct ExplicitKernel {
     drag: wgpu::ComputePipeline,
     /// Whether `params` changed since they were last written.
     params_stale: bool,
+    /// Steps recorded and not yet submitted: they go with the next write or read (a write
+    /// reaches the GPU before any command submitted after it, so the steps before it go first).
+    pending: Option<wgpu::CommandEncoder>,
     /// Host copies: the state (`u` then `v`, component-major) and the load.
     host_state: Vec<f32>,
     host_load: Vec<f32>,
@@ -255,18 +258,15 @@ impl ExplicitKernel {
         let coef = storage(device, "coefficients", &coefficients(form), wgpu::BufferUsages::COPY_DST);
         // A zero-length binding is not allowed: keep one element.
         let op = storage(device, "operator", if op.is_empty() { &[0.0] } else { &op }, wgpu::BufferUsages::empty());
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("state readback"),
-            size: (4 * 6 * nn) as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let health_staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("guard readback"),
-            size: (4 * health_len) as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let readback = |label: &str, floats: usize| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (4 * floats) as u64,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let (staging, health_staging) = (readback("state readback", 6 * nn), readback("guard readback", health_len));
         let (layout, [step, guard, drag]) = pipelines(device, &form.force);
         let bind_groups = [0, 1].map(|i| {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -298,6 +298,7 @@ impl ExplicitKernel {
             guard,
             drag,
             params_stale: false,
+            pending: None,
             host_state,
             host_load,
             host_health,
@@ -314,6 +315,7 @@ impl ExplicitKernel {
                 self.host_state[3 * nn + c * nn + p] = v[c][p] as f32;
             }
         }
+        self.flush();
         self.gpu.queue.write_buffer(&self.state[self.current], 0, bytemuck::cast_slice(&self.host_state));
     }
 
@@ -325,22 +327,29 @@ impl ExplicitKernel {
                 *h = *f as f32;
             }
         }
+        self.flush();
         self.gpu.queue.write_buffer(&self.f_ext, 0, bytemuck::cast_slice(&self.host_load));
     }
 
     /// Writes the external forces of the nodes `nodes` only (a tool's, a few rows of the top
-    /// face: kilobytes where the whole load is megabytes).
+    /// face: kilobytes where the whole load is megabytes), and nothing where they are what the
+    /// GPU has (a load a tool sets again every substep and changes once a tick).
     pub fn write_load_nodes(&mut self, f_ext: &[Vec<f64>; 3], nodes: std::ops::Range<usize>) {
         let nn = self.nn;
         let nodes = nodes.start.min(nn)..nodes.end.min(nn);
-        if nodes.is_empty() {
-            return;
-        }
-        for c in 0..3 {
+        let mut changed = [false; 3];
+        for (c, changed) in changed.iter_mut().enumerate() {
             let at = c * nn + nodes.start..c * nn + nodes.end;
-            for (h, f) in self.host_load[at.clone()].iter_mut().zip(&f_ext[c][nodes.clone()]) {
+            for (h, f) in self.host_load[at].iter_mut().zip(&f_ext[c][nodes.clone()]) {
+                *changed |= *h != *f as f32;
                 *h = *f as f32;
             }
+        }
+        if changed.contains(&true) {
+            self.flush();
+        }
+        for c in (0..3).filter(|&c| changed[c]) {
+            let at = c * nn + nodes.start..c * nn + nodes.end;
             let bytes = bytemuck::cast_slice(&self.host_load[at.clone()]);
             self.gpu.queue.write_buffer(&self.f_ext, (4 * at.start) as u64, bytes);
         }
@@ -348,6 +357,7 @@ impl ExplicitKernel {
 
     /// Rewrites which components are free (a new load case).
     pub fn write_free(&mut self, form: &ExplicitForm) {
+        self.flush();
         self.gpu.queue.write_buffer(&self.coef, 0, bytemuck::cast_slice(&coefficients(form)));
     }
 
@@ -364,16 +374,21 @@ impl ExplicitKernel {
         }
     }
 
-    /// Submits `steps` steps of `dt` (returns before they finish), each followed by the drag's
-    /// split step where a node is held.
+    /// Records `steps` steps of `dt`, each followed by the drag's split step where a node is
+    /// held; they are submitted with the next write or read (or [`ExplicitKernel::finish`]), so
+    /// the substeps of a tick under a held load go to the GPU together.
     pub fn run(&mut self, dt: f64, steps: usize) {
         if self.params.dt != dt as f32 || self.params_stale {
+            self.flush();
             self.params.dt = dt as f32;
             self.params_stale = false;
             self.gpu.queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
         }
         let dragged = self.params.drag_node != NO_DRAG;
-        let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        let gpu = &self.gpu;
+        let encoder = self
+            .pending
+            .get_or_insert_with(|| gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None }));
         {
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None });
@@ -388,7 +403,13 @@ impl ExplicitKernel {
                 self.current = 1 - self.current;
             }
         }
-        self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// Submits the steps recorded.
+    fn flush(&mut self) {
+        if let Some(encoder) = self.pending.take() {
+            self.gpu.queue.submit([encoder.finish()]);
+        }
     }
 
     /// Waits for the steps submitted and reads the state back into positions `x` (rest plus
@@ -399,6 +420,7 @@ impl ExplicitKernel {
         x: &mut [Vec<f64>; 3],
         v: &mut [Vec<f64>; 3],
     ) -> Result<(), GpuError> {
+        self.flush();
         read_into(&self.gpu, &self.mapped, (&self.state[self.current], 0), &self.staging, &mut self.host_state)?;
         let nn = self.nn;
         for c in 0..3 {
@@ -415,7 +437,10 @@ impl ExplicitKernel {
     /// and the held node's velocity change in the last step. One dispatch sums them per
     /// workgroup, and only those sums come back.
     pub fn read_health(&mut self) -> Result<crate::sim::tissue::StepHealth, GpuError> {
-        let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        let gpu = &self.gpu;
+        let encoder = self
+            .pending
+            .get_or_insert_with(|| gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None }));
         {
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None });
@@ -423,7 +448,7 @@ impl ExplicitKernel {
             pass.set_bind_group(0, &self.bind_groups[self.current], &[]);
             pass.dispatch_workgroups(groups(self.nn), 1, 1);
         }
-        self.gpu.queue.submit([encoder.finish()]);
+        self.flush();
         let from = (&self.state[1 - self.current], (4 * 6 * self.nn) as u64);
         read_into(&self.gpu, &self.mapped, from, &self.health_staging, &mut self.host_health)?;
         let (figures, held) = self.host_health.split_at(self.host_health.len() - 4);
@@ -442,8 +467,9 @@ impl ExplicitKernel {
         })
     }
 
-    /// Waits until the GPU has finished everything submitted.
-    pub fn finish(&self) -> Result<(), GpuError> {
+    /// Submits the steps recorded and waits until the GPU has finished everything.
+    pub fn finish(&mut self) -> Result<(), GpuError> {
+        self.flush();
         self.gpu
             .device
             .poll(wgpu::PollType::wait_indefinitely())
