@@ -247,6 +247,11 @@ impl Tissue for GpuTissue {
     fn sync(&mut self) -> Result<(), String> {
         self.sync_out()
     }
+    fn discard_device_state(&mut self) {
+        self.behind = false;
+        self.stale = true;
+        self.failed = None;
+    }
     fn step_health(&mut self) -> Option<Result<StepHealth, String>> {
         // Where it did not step since the state came back, the CPU's copy is the state.
         self.behind.then(|| self.kernel.read_health().map_err(|e| e.to_string()))

@@ -222,6 +222,7 @@ impl Simulation {
     }
 
     fn back_to_rest(&mut self) {
+        self.tissue.discard_device_state();
         let (x, v) = self.tissue.x_v_mut();
         for c in 0..3 {
             x[c].copy_from_slice(&self.rest[c]);
@@ -289,8 +290,8 @@ impl Simulation {
             return Ok(());
         }
         self.steps_unchecked = 0;
-        let unhealthy = match stepped.and_then(|()| self.check()) {
-            Ok(unhealthy) => unhealthy,
+        let (unhealthy, brought_back) = match stepped.and_then(|()| self.check()) {
+            Ok(checked) => checked,
             Err(e) => return Err(self.blow_up(Err(e), None)),
         };
         if unhealthy.is_some() {
@@ -300,7 +301,7 @@ impl Simulation {
             self.recoveries = 0;
         }
         self.steps_since_good += 1;
-        if here && (self.good_time.is_none() || self.steps_since_good >= 100) {
+        if (here || brought_back) && (self.good_time.is_none() || self.steps_since_good >= 100) {
             self.keep_good();
         }
         Ok(())
@@ -308,21 +309,21 @@ impl Simulation {
 
     /// The guard: why the state now is not good, read where it lives (the GPU's figures of its
     /// last step, or, for a cube held nowhere, whose motion as a whole only the state shows,
-    /// the state brought back).
-    fn check(&mut self) -> Result<Option<Unhealthy>, String> {
+    /// the state brought back); and whether the state was brought back for it.
+    fn check(&mut self) -> Result<(Option<Unhealthy>, bool), String> {
         let held = self.tissue.free().contains(&0.0);
         match self.tissue.step_health() {
             Some(health) if held => {
                 let health = health?;
                 self.device_drag_force(health);
-                Ok(self.unhealthy_figures(health))
+                Ok((self.unhealthy_figures(health), false))
             }
             Some(health) => {
                 self.device_drag_force(health?);
                 self.tissue.sync()?;
-                Ok(self.unhealthy())
+                Ok((self.unhealthy(), true))
             }
-            None => Ok(self.unhealthy()),
+            None => Ok((self.unhealthy(), false)),
         }
     }
 
@@ -419,6 +420,7 @@ impl Simulation {
     fn restore(&mut self) {
         match self.good_time {
             Some(t) => {
+                self.tissue.discard_device_state();
                 let (x, v) = self.tissue.x_v_mut();
                 for c in 0..3 {
                     x[c].copy_from_slice(&self.good_x[c]);

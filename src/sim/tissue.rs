@@ -117,6 +117,9 @@ pub trait Tissue: Send + std::fmt::Debug {
     fn sync(&mut self) -> Result<(), String> {
         Ok(())
     }
+    /// The state is about to be written whole (a reset, a restore): the device's is dropped
+    /// without being brought back, and so is a failed readback already reported.
+    fn discard_device_state(&mut self) {}
     /// Takes the dragging spring's split step ([`super::drag_velocity_change`]) on `node`
     /// towards `target` after each symplectic step where the state lives (`None`: lets go), and
     /// says whether it does: a tissue whose state is here leaves it to the caller.
