@@ -20,6 +20,11 @@ use crate::study::timing::time_fallible;
 
 /// The resolutions timed on the GPU, nodes per edge (up to the largest grid).
 pub const GPU_NODES: [usize; 3] = [16, 32, crate::mechanics::grid::MAX_NODES_PER_AXIS];
+/// How long the GPU is kept busy before its step and its tick are timed, s. After a few seconds
+/// idle (a tissue being built on the CPU) an H200 stepped the hex lattice at 64^3 at 111 us a
+/// step for its first 1,000 to 2,000 steps and at 25 us after; the same state stepped at once,
+/// without the pause, took 25 us from the start (the GPU's clocks, not the state).
+const WARM_UP_S: f64 = 0.5;
 /// Ticks run on both before their states are compared.
 const DRIFT_TICKS: usize = 20;
 /// The pull on the top face, N.
@@ -35,7 +40,7 @@ pub struct GpuScale {
     /// Symplectic substeps of the 1 ms tick (the automatic choice's for the undamped tissue).
     pub substeps: usize,
     /// One tick on the GPU under a held load (sent once, before): the substeps in one
-    /// submission, waited for, no readback, s.
+    /// submission, waited for, no readback, after [`WARM_UP_S`] of ticks, s.
     pub gpu_tick_s: f64,
     /// The same and the whole state read back into the CPU's f64 model once (what drawing it
     /// costs, at most 60 times a second in the viewer), s.
@@ -63,7 +68,8 @@ pub struct GpuScale {
 pub struct GpuBench {
     /// The GPU's adapter, or why there is none.
     pub gpu_adapter: String,
-    /// One GPU step alone (100 steps in one submission, no readback), by `model/nodes`, s.
+    /// One GPU step alone (100 steps in one submission, no readback, after [`WARM_UP_S`] of
+    /// steps), by `model/nodes`, s.
     pub gpu_step_s: BTreeMap<String, f64>,
     /// The 1 ms tick at scale, GPU against CPU.
     pub gpu_scale: Vec<GpuScale>,
@@ -101,13 +107,23 @@ pub fn measure(gpu: &ComputeDevice) -> anyhow::Result<GpuBench> {
             let grid = Grid::new(nodes)?;
             let fail = |e: String| anyhow::anyhow!("GPU step of {} at {nodes}^3: {e}", model.name());
             let mut on_gpu = GpuTissue::new(gpu, tissue(model, grid)?)?;
-            let step = time_fallible(0.3, || on_gpu.run_unsynchronised(0.5 * on_gpu.explicit_dt_limit(), 100))
-                .map_err(fail)?;
+            let dt = 0.5 * on_gpu.explicit_dt_limit();
+            warm_up(&mut on_gpu, dt, 100).map_err(fail)?;
+            let step = time_fallible(0.3, || on_gpu.run_unsynchronised(dt, 100)).map_err(fail)?;
             gpu_step_s.insert(format!("{}/{nodes}", model.name()), step / 100.0);
             gpu_scale.push(scale(gpu, model, grid, &surface).map_err(fail)?);
         }
     }
     Ok(GpuBench { gpu_adapter: gpu.describe(), gpu_step_s, gpu_scale })
+}
+
+/// The GPU kept busy for [`WARM_UP_S`] (batches of `steps` steps of `dt`) before a timing.
+fn warm_up(on_gpu: &mut GpuTissue, dt: f64, steps: usize) -> Result<(), String> {
+    let start = std::time::Instant::now();
+    while start.elapsed().as_secs_f64() < WARM_UP_S {
+        on_gpu.run_unsynchronised(dt, steps)?;
+    }
+    Ok(())
 }
 
 /// One model x resolution's tick on both, and the drift between them.
@@ -138,6 +154,7 @@ fn scale(gpu: &ComputeDevice, model: Model, grid: Grid, surface: &MaterialSurfac
         gap = gap.max(d);
         largest = largest.max(u);
     }
+    warm_up(&mut on_gpu, dt, substeps)?;
     let gpu_tick_s = time_fallible(0.3, || on_gpu.run_unsynchronised(dt, substeps))?;
     let gpu_tick_readback_s = time_fallible(0.3, || {
         on_gpu.run_unsynchronised(dt, substeps)?;
