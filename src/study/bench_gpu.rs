@@ -24,7 +24,7 @@ pub const GPU_NODES: [usize; 3] = [16, 32, crate::mechanics::grid::MAX_NODES_PER
 /// idle (a tissue being built on the CPU) an H200 stepped the hex lattice at 64^3 at 111 us a
 /// step for its first 1,000 to 2,000 steps and at 25 us after; the same state stepped at once,
 /// without the pause, took 25 us from the start (the GPU's clocks, not the state).
-const WARM_UP_S: f64 = 0.5;
+pub const WARM_UP_S: f64 = 0.5;
 /// Ticks run on both before their states are compared.
 const DRIFT_TICKS: usize = 20;
 /// The pull on the top face, N.
