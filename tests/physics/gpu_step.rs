@@ -200,3 +200,34 @@ fn the_gpu_steps_the_drag() {
         }
     }
 }
+
+/// A cube held nowhere on the GPU (its guard reads the state brought back once a tick, since its
+/// motion as a whole shows only there): dragged by a corner it moves as on the CPU.
+#[test]
+fn a_cube_held_nowhere_runs_on_the_gpu_as_on_the_cpu() {
+    if tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none() {
+        eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
+        return;
+    }
+    let free = |compute: &str| -> Script {
+        serde_json::from_value(serde_json::json!({
+            "object": "A", "model": "hex", "compute": compute, "clamp": "none",
+            "actions": [
+                { "drag": { "node": 511, "to": [0.12, 0.1, 0.1], "duration_s": 0.03 } },
+                { "release": {} },
+                { "wait": { "duration_s": 0.03 } }
+            ]
+        }))
+        .expect("a valid script")
+    };
+    let (cpu, gpu) = (run(&free("cpu")).expect("the CPU run"), run(&free("gpu")).expect("the GPU run"));
+    assert!(gpu.blow_ups.is_empty() && cpu.blow_ups.is_empty(), "{:?} {:?}", gpu.blow_ups, cpu.blow_ups);
+    let scale = cpu.events.iter().map(|e| e.max_displacement_m).fold(0.0, f64::max);
+    let apart = final_positions(&cpu)
+        .iter()
+        .zip(final_positions(&gpu))
+        .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    assert!(scale > 5e-3, "moved only {scale} m");
+    assert!(apart <= TOLERANCE * scale, "the runs part by {apart} m of {scale} m");
+}
