@@ -385,13 +385,8 @@ impl ExplicitKernel {
             self.gpu.queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
         }
         let dragged = self.params.drag_node != NO_DRAG;
-        let gpu = &self.gpu;
-        let encoder = self
-            .pending
-            .get_or_insert_with(|| gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None }));
         {
-            let mut pass =
-                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None });
+            let mut pass = pending_pass(&mut self.pending, &self.gpu);
             for _ in 0..steps {
                 pass.set_bind_group(0, &self.bind_groups[self.current], &[]);
                 pass.set_pipeline(&self.step);
@@ -437,13 +432,8 @@ impl ExplicitKernel {
     /// and the held node's velocity change in the last step. One dispatch sums them per
     /// workgroup, and only those sums come back.
     pub fn read_health(&mut self) -> Result<crate::sim::tissue::StepHealth, GpuError> {
-        let gpu = &self.gpu;
-        let encoder = self
-            .pending
-            .get_or_insert_with(|| gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None }));
         {
-            let mut pass =
-                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None });
+            let mut pass = pending_pass(&mut self.pending, &self.gpu);
             pass.set_pipeline(&self.guard);
             pass.set_bind_group(0, &self.bind_groups[self.current], &[]);
             pass.dispatch_workgroups(groups(self.nn), 1, 1);
@@ -476,6 +466,13 @@ impl ExplicitKernel {
             .map(|_| ())
             .map_err(|e| GpuError::Readback(e.to_string()))
     }
+}
+
+/// A compute pass recorded after what `pending` holds (a new encoder where it holds none).
+fn pending_pass<'a>(pending: &'a mut Option<wgpu::CommandEncoder>, gpu: &ComputeDevice) -> wgpu::ComputePass<'a> {
+    pending
+        .get_or_insert_with(|| gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None }))
+        .begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None })
 }
 
 /// Copies `out.len()` values of `from` (a buffer, a byte offset) through `staging` into `out`,

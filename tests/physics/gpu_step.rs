@@ -26,22 +26,37 @@ fn final_positions(o: &Outcome) -> &[[f64; 3]] {
     o.events.last().and_then(|e| e.positions.as_deref()).expect("the last event has positions")
 }
 
+/// The largest distance between the two runs' final node positions, and the CPU run's largest
+/// displacement (the scale it is compared with), m.
+fn apart(cpu: &Outcome, gpu: &Outcome) -> (f64, f64) {
+    let scale = cpu.events.iter().map(|e| e.max_displacement_m).fold(0.0, f64::max);
+    let apart = final_positions(cpu)
+        .iter()
+        .zip(final_positions(gpu))
+        .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    (apart, scale)
+}
+
+/// Whether a test that needs an adapter skips: none here and not in CI (which requires one).
+fn skipped() -> bool {
+    let none = tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none();
+    if none {
+        eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
+    }
+    none
+}
+
 #[test]
 fn the_gpu_step_follows_the_cpu_step() {
-    if tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none() {
-        eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
+    if skipped() {
         return;
     }
     for (model, nodes) in [("hex", 8), ("shear", 8), ("axis", 8), ("fem-linear", 8), ("hex", 11), ("fem-linear", 11)] {
         let cpu = run(&script(model, nodes, "cpu")).expect("the CPU run");
         let gpu = run(&script(model, nodes, "gpu")).expect("the GPU run");
         assert_eq!(gpu.steps, cpu.steps);
-        let scale = cpu.events.iter().map(|e| e.max_displacement_m).fold(0.0, f64::max);
-        let apart = final_positions(&cpu)
-            .iter()
-            .zip(final_positions(&gpu))
-            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt())
-            .fold(0.0, f64::max);
+        let (apart, scale) = apart(&cpu, &gpu);
         assert!(scale > 1e-4, "{model} {nodes}^3 moved only {scale} m");
         assert!(apart <= TOLERANCE * scale, "{model} {nodes}^3: the runs part by {apart} m of {scale} m");
         let (f_cpu, f_gpu) = (cpu.force_depth.last().expect("samples"), gpu.force_depth.last().expect("samples"));
@@ -72,8 +87,7 @@ fn the_gpu_refuses_what_it_has_no_step_for() {
 /// kernel's figures once a tick. The same trajectory and force as the CPU's.
 #[test]
 fn the_state_stays_on_the_gpu_under_the_surface_probe() {
-    if tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none() {
-        eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
+    if skipped() {
         return;
     }
     let pressed = |model: &str, nodes: usize, compute: &str| -> Script {
@@ -92,12 +106,7 @@ fn the_state_stays_on_the_gpu_under_the_surface_probe() {
         let gpu = run(&pressed(model, nodes, "gpu")).expect("the GPU run");
         assert_eq!(gpu.steps, cpu.steps);
         assert!(gpu.blow_ups.is_empty() && cpu.blow_ups.is_empty(), "{:?} {:?}", gpu.blow_ups, cpu.blow_ups);
-        let scale = cpu.events.iter().map(|e| e.max_displacement_m).fold(0.0, f64::max);
-        let apart = final_positions(&cpu)
-            .iter()
-            .zip(final_positions(&gpu))
-            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt())
-            .fold(0.0, f64::max);
+        let (apart, scale) = apart(&cpu, &gpu);
         assert!(scale > 1e-3, "{model} {nodes}^3 moved only {scale} m");
         assert!(apart <= TOLERANCE * scale, "{model} {nodes}^3: the runs part by {apart} m of {scale} m");
         let (f_cpu, f_gpu) = (cpu.force_depth.last().expect("samples"), gpu.force_depth.last().expect("samples"));
@@ -162,8 +171,7 @@ fn the_gpu_guard_figures_are_the_states() {
 /// the cube as on the CPU, and the hand feels the same force.
 #[test]
 fn the_gpu_steps_the_drag() {
-    if tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none() {
-        eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
+    if skipped() {
         return;
     }
     let dragged = |model: &str, nodes: usize, compute: &str| -> Script {
@@ -180,12 +188,7 @@ fn the_gpu_steps_the_drag() {
         let cpu = run(&dragged(model, nodes, "cpu")).expect("the CPU run");
         let gpu = run(&dragged(model, nodes, "gpu")).expect("the GPU run");
         assert!(gpu.blow_ups.is_empty() && cpu.blow_ups.is_empty(), "{:?} {:?}", gpu.blow_ups, cpu.blow_ups);
-        let scale = cpu.events.iter().map(|e| e.max_displacement_m).fold(0.0, f64::max);
-        let apart = final_positions(&cpu)
-            .iter()
-            .zip(final_positions(&gpu))
-            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt())
-            .fold(0.0, f64::max);
+        let (apart, scale) = apart(&cpu, &gpu);
         assert!(scale > 5e-3, "{model} {nodes}^3 moved only {scale} m");
         assert!(apart <= TOLERANCE * scale, "{model} {nodes}^3: the runs part by {apart} m of {scale} m");
         for (a, b) in cpu.events.iter().zip(&gpu.events) {
@@ -205,8 +208,7 @@ fn the_gpu_steps_the_drag() {
 /// motion as a whole shows only there): dragged by a corner it moves as on the CPU.
 #[test]
 fn a_cube_held_nowhere_runs_on_the_gpu_as_on_the_cpu() {
-    if tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none() {
-        eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
+    if skipped() {
         return;
     }
     let free = |compute: &str| -> Script {
@@ -222,12 +224,7 @@ fn a_cube_held_nowhere_runs_on_the_gpu_as_on_the_cpu() {
     };
     let (cpu, gpu) = (run(&free("cpu")).expect("the CPU run"), run(&free("gpu")).expect("the GPU run"));
     assert!(gpu.blow_ups.is_empty() && cpu.blow_ups.is_empty(), "{:?} {:?}", gpu.blow_ups, cpu.blow_ups);
-    let scale = cpu.events.iter().map(|e| e.max_displacement_m).fold(0.0, f64::max);
-    let apart = final_positions(&cpu)
-        .iter()
-        .zip(final_positions(&gpu))
-        .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt())
-        .fold(0.0, f64::max);
+    let (apart, scale) = apart(&cpu, &gpu);
     assert!(scale > 5e-3, "moved only {scale} m");
     assert!(apart <= TOLERANCE * scale, "the runs part by {apart} m of {scale} m");
 }
