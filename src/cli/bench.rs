@@ -19,7 +19,14 @@ pub struct BenchArgs {
 /// Runs the benchmark and prints its report.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     if args.gpu {
-        let report = crate::study::bench_gpu::measure(&crate::gpu::ComputeDevice::open()?)?;
+        let gpu = crate::gpu::ComputeDevice::open()?;
+        let material = crate::mechanics::material::Material::object_a();
+        let surface = crate::sim::surface_probe::MaterialSurface::load_or_compute(
+            &material,
+            crate::io::cache_dir().as_deref(),
+            &mut |_| true,
+        )?;
+        let report = crate::study::bench_gpu::measure(&gpu, &surface)?;
         return if args.json { say(&serde_json::to_string_pretty(&report)?) } else { say_raw(&report.to_text()) };
     }
     let report = crate::study::bench::run()?;

@@ -321,14 +321,7 @@ impl ExplicitKernel {
 
     /// Writes the external forces, newtons.
     pub fn write_load(&mut self, f_ext: &[Vec<f64>; 3]) {
-        let nn = self.nn;
-        for c in 0..3 {
-            for (h, f) in self.host_load[c * nn..(c + 1) * nn].iter_mut().zip(&f_ext[c]) {
-                *h = *f as f32;
-            }
-        }
-        self.flush();
-        self.gpu.queue.write_buffer(&self.f_ext, 0, bytemuck::cast_slice(&self.host_load));
+        self.write_load_nodes(f_ext, 0..self.nn);
     }
 
     /// Writes the external forces of the nodes `nodes` only (a tool's, a few rows of the top

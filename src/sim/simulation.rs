@@ -250,7 +250,7 @@ impl Simulation {
             Tool::Drag { node, target } if !implicit && self.tissue.free()[node] != 0.0 => Some((node, target)),
             _ => None,
         };
-        self.device_drag = (on_device && self.tissue.hold_by_drag(drag)).then_some(drag).flatten().map(|(p, _)| p);
+        self.device_drag = if on_device && self.tissue.hold_by_drag(drag) { drag.map(|(p, _)| p) } else { None };
         let drags_here = matches!(self.tool, Tool::Drag { .. }) && self.device_drag.is_none();
         let reads_nodes = on_device && (self.node_contact() || drags_here);
         if stepped.is_ok() && reads_nodes {
@@ -311,20 +311,23 @@ impl Simulation {
     /// last step, or, for a cube held nowhere, whose motion as a whole only the state shows,
     /// the state brought back); and whether the state was brought back for it.
     fn check(&mut self) -> Result<(Option<Unhealthy>, bool), String> {
-        let held = self.tissue.free().contains(&0.0);
         match self.tissue.step_health() {
-            Some(health) if held => {
+            Some(health) if self.tissue.free().contains(&0.0) => {
                 let health = health?;
                 self.device_drag_force(health);
                 Ok((self.unhealthy_figures(health), false))
             }
-            Some(health) => {
-                self.device_drag_force(health?);
-                self.tissue.sync()?;
-                Ok((self.unhealthy(), true))
-            }
+            Some(health) => Ok((self.bring_back(health)?, true)),
             None => Ok((self.unhealthy(), false)),
         }
+    }
+
+    /// The state brought back from the GPU after its last step's figures `health` (the drag's
+    /// force), and why it is not good, if it is not.
+    fn bring_back(&mut self, health: Result<super::tissue::StepHealth, String>) -> Result<Option<Unhealthy>, String> {
+        self.device_drag_force(health?);
+        self.tissue.sync()?;
+        Ok(self.unhealthy())
     }
 
     /// After a failed step or an unhealthy state: restores the last good state (or rest after
@@ -370,8 +373,7 @@ impl Simulation {
         let Some(health) = self.tissue.step_health() else {
             return Ok(());
         };
-        let unhealthy = health.map(|h| self.device_drag_force(h)).and_then(|()| self.tissue.sync());
-        match unhealthy.map(|()| self.unhealthy()) {
+        match self.bring_back(health) {
             Ok(None) => {
                 self.keep_good();
                 Ok(())

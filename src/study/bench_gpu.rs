@@ -95,10 +95,8 @@ pub fn unavailable(why: &crate::gpu::GpuError) -> GpuBench {
     GpuBench { gpu_adapter: why.to_string(), gpu_step_s: BTreeMap::new(), gpu_scale: Vec::new() }
 }
 
-/// The GPU's figures on `gpu`.
-pub fn measure(gpu: &ComputeDevice) -> anyhow::Result<GpuBench> {
-    let surface =
-        MaterialSurface::load_or_compute(&Material::object_a(), crate::io::cache_dir().as_deref(), &mut |_| true)?;
+/// The GPU's figures on `gpu`, the probe pressed on object A's `surface` compliance.
+pub fn measure(gpu: &ComputeDevice, surface: &MaterialSurface) -> anyhow::Result<GpuBench> {
     let mut gpu_step_s = BTreeMap::new();
     let mut gpu_scale = Vec::new();
     for model in models() {
@@ -111,7 +109,7 @@ pub fn measure(gpu: &ComputeDevice) -> anyhow::Result<GpuBench> {
             warm_up(&mut on_gpu, dt, 100).map_err(fail)?;
             let step = time_fallible(0.3, || on_gpu.run_unsynchronised(dt, 100)).map_err(fail)?;
             gpu_step_s.insert(format!("{}/{nodes}", model.name()), step / 100.0);
-            gpu_scale.push(scale(gpu, model, grid, &surface).map_err(fail)?);
+            gpu_scale.push(scale(gpu, model, grid, surface).map_err(fail)?);
         }
     }
     Ok(GpuBench { gpu_adapter: gpu.describe(), gpu_step_s, gpu_scale })

@@ -163,7 +163,7 @@ pub fn run() -> anyhow::Result<Sweep> {
         largest_1khz_nodes.insert(model.name(), fast);
     }
     let gpu = match &gpu {
-        Ok(g) => super::bench_gpu::measure(g)?,
+        Ok(g) => super::bench_gpu::measure(g, &surface)?,
         Err(e) => super::bench_gpu::unavailable(e),
     };
     Ok(Sweep { ticks, largest_1khz_nodes, gpu })
