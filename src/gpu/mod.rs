@@ -18,13 +18,18 @@ pub mod tissue;
 pub use device::{ComputeDevice, GpuError};
 pub use tissue::GpuTissue;
 
-/// Where a model's steps are computed: `cpu` (the default) or `gpu` (scripts, the viewer).
+/// Where a model's steps are computed: `cpu` (the default), `cpu-f32` or `gpu` (scripts, the
+/// viewer).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Compute {
     /// The CPU, in f64.
     #[default]
     Cpu,
+    /// The CPU, the symplectic step's internal force summed in f32 (the linear FEM;
+    /// [`crate::sim::Tissue::set_single_precision`]).
+    #[serde(rename = "cpu-f32")]
+    CpuF32,
     /// The GPU's compute shaders, in f32 (symplectic Euler only).
     Gpu,
 }
@@ -34,15 +39,21 @@ impl Compute {
     pub fn name(self) -> &'static str {
         match self {
             Compute::Cpu => "cpu",
+            Compute::CpuF32 => "cpu-f32",
             Compute::Gpu => "gpu",
         }
     }
 
-    /// `tissue` as it runs here: itself on the CPU, or wrapped to step on the GPU (opening an
-    /// adapter; a one-line error where none computes or the model has no GPU step).
-    pub fn place(self, tissue: Box<dyn crate::sim::Tissue>) -> Result<Box<dyn crate::sim::Tissue>, GpuError> {
+    /// `tissue` as it runs here: itself on the CPU (its force in f32 for `cpu-f32`), or wrapped
+    /// to step on the GPU (opening an adapter; a one-line error where none computes or the
+    /// model has no such step).
+    pub fn place(self, mut tissue: Box<dyn crate::sim::Tissue>) -> Result<Box<dyn crate::sim::Tissue>, GpuError> {
         match self {
             Compute::Cpu => Ok(tissue),
+            Compute::CpuF32 => {
+                tissue.set_single_precision(true).map_err(GpuError::Unsupported)?;
+                Ok(tissue)
+            }
             Compute::Gpu => Ok(Box::new(GpuTissue::new(&ComputeDevice::open()?, tissue)?)),
         }
     }

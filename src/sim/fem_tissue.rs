@@ -30,6 +30,11 @@ pub struct FemTissue {
     free: Vec<f64>,
     /// The displacement buffer of the component-wise step.
     u: [Vec<f64>; 3],
+    /// The linear FEM's symplectic step takes `K u` in `f32` ([`Tissue::set_single_precision`]).
+    single: bool,
+    /// `u` and `K u` in `f32`, for that step (empty unless `single`).
+    u_f32: [Vec<f32>; 3],
+    ku_f32: [Vec<f32>; 3],
     /// 1.0 for a free dof, 0.0 for a fixed one, component-wise.
     free_dofs: [Vec<f64>; 3],
     /// `1 / mass` of each node (its three dofs share it), 1/kg.
@@ -59,6 +64,9 @@ impl FemTissue {
             forces: std::array::from_fn(|_| vec![0.0; nn]),
             free: vec![1.0; nn],
             u: std::array::from_fn(|_| vec![0.0; nn]),
+            single: false,
+            u_f32: Default::default(),
+            ku_f32: Default::default(),
             free_dofs: split(&dynamics.free),
             inv_mass: (0..nn).map(|p| dynamics.inv_mass[3 * p]).collect(),
             node_mass: (0..nn).map(|p| dynamics.mass[3 * p]).collect(),
@@ -86,6 +94,9 @@ impl FemTissue {
     /// of [`FemDynamics::step_symplectic`] in the same order (the same bits): `u = x - X`,
     /// `v = (v + dt ((f_ext - K u) m^-1 - alpha v)) free`, `x += dt v`. Allocation-free.
     pub fn step_linear_symplectic(&mut self, dt: f64) {
+        if self.single {
+            return self.step_linear_symplectic_f32(dt);
+        }
         let d = &self.dynamics;
         for c in 0..3 {
             for ((u, x), r) in self.u[c].iter_mut().zip(&self.x[c]).zip(&d.rest_components()[c]) {
@@ -94,6 +105,29 @@ impl FemTissue {
         }
         d.model.stencil().apply_components(&self.u, &mut self.forces);
         self.advance_symplectic::<true>(dt);
+    }
+
+    /// [`FemTissue::step_linear_symplectic`] with `u` rounded to `f32` and `K u` summed in `f32`
+    /// (the stencil's blocks rounded too), the rest in `f64`. Allocation-free.
+    fn step_linear_symplectic_f32(&mut self, dt: f64) {
+        let d = &self.dynamics;
+        for c in 0..3 {
+            for ((u, x), r) in self.u_f32[c].iter_mut().zip(&self.x[c]).zip(&d.rest_components()[c]) {
+                *u = (x - r) as f32;
+            }
+        }
+        d.model.stencil().apply_components(&self.u_f32, &mut self.ku_f32);
+        let (alpha, n) = (d.alpha, self.inv_mass.len());
+        for c in 0..3 {
+            // Every slice cut to `n`: no bounds checks, so the loop vectorises.
+            let (x, v, f) = (&mut self.x[c][..n], &mut self.v[c][..n], &mut self.forces[c][..n]);
+            let (f_ext, ku, free, inv_mass) =
+                (&self.f_ext[c][..n], &self.ku_f32[c][..n], &self.free_dofs[c][..n], &self.inv_mass[..n]);
+            for p in 0..n {
+                f[p] = f_ext[p] - f64::from(ku[p]);
+                symplectic_update(&mut x[p], &mut v[p], f[p] * inv_mass[p], alpha, free[p], dt);
+            }
+        }
     }
 
     /// One symplectic Euler step of the corotational FEM on the component-wise state, the
@@ -109,17 +143,16 @@ impl FemTissue {
     /// `self.forces`, or (`LINEAR`) `f = f_ext - K u` with `K u` there (in the same pass, which
     /// then leaves the total force in `self.forces`).
     fn advance_symplectic<const LINEAR: bool>(&mut self, dt: f64) {
-        let alpha = self.dynamics.alpha;
+        let (alpha, n) = (self.dynamics.alpha, self.inv_mass.len());
         for c in 0..3 {
-            let (x, v, f, free) = (&mut self.x[c], &mut self.v[c], &mut self.forces[c], &self.free_dofs[c]);
-            let f_ext = &self.f_ext[c];
-            for p in 0..x.len() {
+            // Every slice cut to `n`: no bounds checks, so the loop vectorises.
+            let (x, v, f) = (&mut self.x[c][..n], &mut self.v[c][..n], &mut self.forces[c][..n]);
+            let (f_ext, free, inv_mass) = (&self.f_ext[c][..n], &self.free_dofs[c][..n], &self.inv_mass[..n]);
+            for p in 0..n {
                 if LINEAR {
                     f[p] = f_ext[p] - f[p];
                 }
-                let vel = (v[p] + dt * (f[p] * self.inv_mass[p] - alpha * v[p])) * free[p];
-                v[p] = vel;
-                x[p] += dt * vel;
+                symplectic_update(&mut x[p], &mut v[p], f[p] * inv_mass[p], alpha, free[p], dt);
             }
         }
     }
@@ -132,6 +165,15 @@ impl FemTissue {
             }
         }
     }
+}
+
+/// A node's symplectic Euler update from its acceleration `a = f / m`: `v = (v + dt (a - alpha
+/// v)) free`, `x += dt v`.
+#[inline(always)]
+fn symplectic_update(x: &mut f64, v: &mut f64, a: f64, alpha: f64, free: f64, dt: f64) {
+    let vel = (*v + dt * (a - alpha * *v)) * free;
+    *v = vel;
+    *x += dt * vel;
 }
 
 /// The FEM cube's `omega_max^2` for its explicit limit, s^-2: the Lanczos upper estimate on the
@@ -169,6 +211,17 @@ impl Tissue for FemTissue {
     }
     fn newton_solves(&self) -> Option<crate::mechanics::newton_krylov::NewtonSolves> {
         self.dynamics.newton_solves()
+    }
+    fn set_single_precision(&mut self, single: bool) -> Result<(), String> {
+        if single && self.dynamics.formulation != Formulation::Linear {
+            return Err("the corotational FEM has no f32 step (its rotations need f64): the linear FEM has one".into());
+        }
+        let nn = if single { self.free.len() } else { 0 };
+        self.single = single;
+        for buffer in self.u_f32.iter_mut().chain(&mut self.ku_f32) {
+            buffer.resize(nn, 0.0);
+        }
+        Ok(())
     }
     fn set_anchor(&mut self, anchor: Option<crate::mechanics::anchor::Anchor>) -> bool {
         self.dynamics.anchor = anchor;

@@ -124,6 +124,40 @@ fn warm_up(on_gpu: &mut GpuTissue, dt: f64, steps: usize) -> Result<(), String> 
     Ok(())
 }
 
+/// The largest distance between a node's positions `a` and `b` on `grid`, over the largest
+/// displacement from rest in `b` (the reference).
+fn relative_gap(a: &[Vec<f64>; 3], b: &[Vec<f64>; 3], grid: Grid) -> f64 {
+    let (mut gap, mut largest) = (0.0_f64, 0.0_f64);
+    for p in 0..grid.num_nodes() {
+        let x0 = grid.position(p);
+        let d = (0..3).map(|c| (a[c][p] - b[c][p]).powi(2)).sum::<f64>().sqrt();
+        let u = (0..3).map(|c| (b[c][p] - x0[c]).powi(2)).sum::<f64>().sqrt();
+        gap = gap.max(d);
+        largest = largest.max(u);
+    }
+    gap / largest
+}
+
+/// The CPU's `f32` force ([`crate::gpu::Compute::CpuF32`]) against its `f64` one: after 20
+/// ticks from rest under the pull, the largest distance between a node's positions over the
+/// largest displacement in `f64`.
+pub fn cpu_f32_drift(model: Model, grid: Grid) -> anyhow::Result<f64> {
+    let run = |single: bool| -> anyhow::Result<Box<dyn Tissue>> {
+        let mut t = tissue(model, grid)?;
+        t.set_single_precision(single).map_err(anyhow::Error::msg)?;
+        let limit = crate::sim::StepLimit::tissue(t.explicit_dt_limit());
+        let substeps =
+            crate::sim::fewest_substeps(Integrator::Symplectic, TICK_S, limit, t.damping(), DEFAULT_DYNAMIC_BUDGET)
+                .ok_or_else(|| anyhow::anyhow!("no substep count is stable"))?;
+        for _ in 0..DRIFT_TICKS * substeps {
+            t.step(Integrator::Symplectic, TICK_S / substeps as f64).map_err(anyhow::Error::msg)?;
+        }
+        Ok(t)
+    };
+    let (single, double) = (run(true)?, run(false)?);
+    Ok(relative_gap(single.x(), double.x(), grid))
+}
+
 /// One model x resolution's tick on both, and the drift between them.
 fn scale(gpu: &ComputeDevice, model: Model, grid: Grid, surface: &MaterialSurface) -> Result<GpuScale, String> {
     let built = || tissue(model, grid).map_err(|e| format!("{e:#}"));
@@ -143,15 +177,7 @@ fn scale(gpu: &ComputeDevice, model: Model, grid: Grid, surface: &MaterialSurfac
         on_gpu.run_unsynchronised(dt, substeps)?;
     }
     on_gpu.read_back()?;
-    let (a, b) = (on_gpu.x(), cpu.x());
-    let (mut gap, mut largest) = (0.0_f64, 0.0_f64);
-    for p in 0..grid.num_nodes() {
-        let x0 = grid.position(p);
-        let d = (0..3).map(|c| (a[c][p] - b[c][p]).powi(2)).sum::<f64>().sqrt();
-        let u = (0..3).map(|c| (b[c][p] - x0[c]).powi(2)).sum::<f64>().sqrt();
-        gap = gap.max(d);
-        largest = largest.max(u);
-    }
+    let f32_drift = relative_gap(on_gpu.x(), cpu.x(), grid);
     warm_up(&mut on_gpu, dt, substeps)?;
     let gpu_tick_s = time_fallible(0.3, || on_gpu.run_unsynchronised(dt, substeps))?;
     let gpu_tick_readback_s = time_fallible(0.3, || {
@@ -172,7 +198,7 @@ fn scale(gpu: &ComputeDevice, model: Model, grid: Grid, surface: &MaterialSurfac
         cpu_tick_s,
         cpu_threads: crate::mechanics::parallel::pool().map_or(1, rayon::ThreadPool::current_num_threads),
         gpu_speedup: cpu_tick_s / gpu_tick_s,
-        f32_drift: gap / largest,
+        f32_drift,
     })
 }
 

@@ -32,7 +32,7 @@ pub struct SweepTick {
     pub nodes: usize,
     /// The integrator.
     pub integrator: String,
-    /// `cpu` or `gpu`.
+    /// `cpu`, `cpu-f32` or `gpu`.
     pub compute: String,
     /// Substeps of the 1 ms tick that keep it stable and inside the budget (`None`: none up to
     /// [`crate::sim::MAX_AUTO_SUBSTEPS`] does).
@@ -49,6 +49,11 @@ pub struct SweepTick {
     /// [`crate::mechanics::newton_krylov`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub newton_solves: Option<crate::mechanics::newton_krylov::NewtonSolves>,
+    /// `cpu-f32` rows: how far the `f32` force moves the answer
+    /// ([`super::bench_gpu::cpu_f32_drift`]: the largest node distance after 20 ticks under a
+    /// pull, over the largest displacement in `f64`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub f32_drift: Option<f64>,
 }
 
 /// The sweep's results.
@@ -79,7 +84,8 @@ pub fn sweep_model(
     let (limit, damping) = (sim.limit(), sim.tissue.damping());
     let auto = crate::sim::choose_step(None, TICK_S, limit, damping, DEFAULT_DYNAMIC_BUDGET).ok();
     let integrators: &[Integrator] =
-        if compute == Compute::Gpu { &[Integrator::Symplectic] } else { &SWEEP_INTEGRATORS };
+        if compute == Compute::Cpu { &SWEEP_INTEGRATORS } else { &[Integrator::Symplectic] };
+    let f32_drift = if compute == Compute::CpuF32 { Some(super::bench_gpu::cpu_f32_drift(model, grid)?) } else { None };
     for &integrator in integrators {
         let substeps = crate::sim::fewest_substeps(integrator, TICK_S, limit, damping, DEFAULT_DYNAMIC_BUDGET);
         let automatic = compute == Compute::Cpu
@@ -110,6 +116,7 @@ pub fn sweep_model(
             tick_s,
             note,
             newton_solves,
+            f32_drift,
         });
     }
     Ok(())
@@ -125,8 +132,9 @@ pub fn run() -> anyhow::Result<Sweep> {
     for model in Model::ALL {
         for nodes in SWEEP_NODES {
             let on_gpu = model != Model::Fem(crate::mechanics::fem::dynamics::Formulation::Corotational);
-            for compute in [Compute::Cpu, Compute::Gpu] {
-                if compute == Compute::Gpu && !(gpu.is_ok() && on_gpu) {
+            let f32_force = model == Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear);
+            for compute in [Compute::Cpu, Compute::CpuF32, Compute::Gpu] {
+                if (compute == Compute::Gpu && !(gpu.is_ok() && on_gpu)) || (compute == Compute::CpuF32 && !f32_force) {
                     continue;
                 }
                 eprintln!(
@@ -148,6 +156,7 @@ pub fn run() -> anyhow::Result<Sweep> {
                         tick_s: None,
                         note: Some(format!("{e:#}")),
                         newton_solves: None,
+                        f32_drift: None,
                     });
                 }
             }
@@ -188,8 +197,12 @@ impl Sweep {
                 )
             });
             s += &format!(
-                "  {:<17} {:>2}^3 {:<12} {} x{k:<3} {time}{auto}{cg}\n",
-                t.model, t.nodes, t.integrator, t.compute
+                "  {:<17} {:>2}^3 {:<12} {} x{k:<3} {time}{auto}{cg}{drift}\n",
+                t.model,
+                t.nodes,
+                t.integrator,
+                t.compute,
+                drift = t.f32_drift.map_or(String::new(), |d| format!(" (f32 drift after 20 ticks {d:.1e})"))
             );
         }
         s += "largest resolution at 1 kHz (automatic choice, CPU):\n";

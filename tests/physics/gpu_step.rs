@@ -1,5 +1,6 @@
 //! The GPU's explicit step (wgpu compute, f32) against the CPU's (f64) on whatever adapter exists
-//! (software Vulkan, Mesa lavapipe, in CI): the same script gives the same trajectory.
+//! (software Vulkan, Mesa lavapipe, in CI): the same script gives the same trajectory. Likewise
+//! the CPU's step with its force in f32 (`"compute": "cpu-f32"`).
 
 use tissue_sim::study::script::{Outcome, Script, run};
 
@@ -45,6 +46,21 @@ fn skipped() -> bool {
         eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
     }
     none
+}
+
+#[test]
+fn the_cpu_f32_force_follows_the_f64_step() {
+    for nodes in [8, 11, 16] {
+        let cpu = run(&script("fem-linear", nodes, "cpu")).expect("the f64 run");
+        let single = run(&script("fem-linear", nodes, "cpu-f32")).expect("the f32 run");
+        assert_eq!(single.steps, cpu.steps);
+        let (apart, scale) = apart(&cpu, &single);
+        assert!(scale > 1e-4, "{nodes}^3 moved only {scale} m");
+        assert!(apart <= TOLERANCE * scale, "{nodes}^3: the runs part by {apart} m of {scale} m");
+        assert!(apart > 0.0, "{nodes}^3: the f32 run is the f64 one");
+    }
+    let refused = run(&script("hex", 8, "cpu-f32")).expect_err("the lattices have no f32 force");
+    assert!(format!("{refused:#}").contains("no f32 step"), "{refused:#}");
 }
 
 #[test]

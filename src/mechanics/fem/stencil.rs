@@ -10,21 +10,128 @@
 //! zero ones, runs alternated).
 //!
 //! Two layouts: interleaved (`3 node + component`, [`Stencil::apply`]) and component-wise
-//! (`u[c][node]`, [`Stencil::apply_components`], the running FEM's state). In the second, the
-//! nodes of a grid row that are inside along x share one class and read their neighbours at
-//! the same index steps, so with AVX2 eight (or four) of them are summed at a time; every node's sum is
-//! the same sequence of operations in both layouts and on both paths, so the bits are the same.
+//! (`u[c][node]`, [`Stencil::apply_components`], the running FEM's state, in `f64` or `f32`). In
+//! the second, the nodes of a grid row that are inside along x share one class and read their
+//! neighbours at the same index steps, so with AVX2 a register of them (four in `f64`, eight in
+//! `f32`) is summed at a time, two registers where the row has room; an x face's nodes inside
+//! along y likewise, gathered n apart. Every node's sum is the same sequence of operations in
+//! both layouts and on every path, so in `f64` the bits are the same. The `f32` product (the
+//! linear FEM's `cpu-f32` step) took 105 to 106 us at 24^3 on one core against 178 to 181 us in
+//! `f64` (a scratch harness, minimum of 30 batches of 100 products, three runs).
 
 use super::element::{ElementStiffness, NODE_SIDES};
 use crate::mechanics::grid::Grid;
 
-/// A neighbour in a node's row of `K`: the step in node index to it, its 3x3 block (row-major)
-/// and which of the block's entries are not zero.
+/// A neighbour in a node's row of `K`: the step in node index to it, its 3x3 block (row-major,
+/// in `f64` or `f32`) and which of the block's entries are not zero.
 #[derive(Debug, Clone, Copy)]
-struct Tap {
+pub struct Tap<T> {
     delta: isize,
-    block: [f64; 9],
+    block: [T; 9],
     pattern: Pattern,
+}
+
+/// A class's taps grouped by pattern (diagonal blocks, then those coupling x and y, x and z, y
+/// and z, then full ones; each group in increasing offset), so that a group's products are
+/// written out without a branch on the pattern.
+#[derive(Debug, Clone)]
+pub struct ClassTaps<T> {
+    taps: Vec<Tap<T>>,
+    /// Where each pattern's group ends in `taps`.
+    ends: [usize; 5],
+}
+
+impl<T: Copy> ClassTaps<T> {
+    /// `taps` (in increasing offset) grouped by pattern.
+    fn grouped(taps: &[Tap<T>]) -> Self {
+        let mut sorted = Vec::with_capacity(taps.len());
+        let ends = Pattern::ALL.map(|pattern| {
+            sorted.extend(taps.iter().filter(|t| t.pattern == pattern));
+            sorted.len()
+        });
+        Self { taps: sorted, ends }
+    }
+
+    /// The taps of the `i`-th pattern of [`Pattern::ALL`].
+    #[inline(always)]
+    fn group(&self, i: usize) -> &[Tap<T>] {
+        &self.taps[if i == 0 { 0 } else { self.ends[i - 1] }..self.ends[i]]
+    }
+
+    /// The same taps with each block in another precision.
+    fn map<U>(&self, f: impl Fn(T) -> U) -> ClassTaps<U> {
+        let taps =
+            self.taps.iter().map(|t| Tap { delta: t.delta, block: t.block.map(&f), pattern: t.pattern }).collect();
+        ClassTaps { taps, ends: self.ends }
+    }
+}
+
+/// `$group!(taps, pattern)` for each pattern's group of a [`ClassTaps`], the pattern a constant.
+macro_rules! by_pattern {
+    ($class:expr, $group:ident) => {{
+        $group!($class.group(0), Pattern::Diagonal);
+        $group!($class.group(1), Pattern::Xy);
+        $group!($class.group(2), Pattern::Xz);
+        $group!($class.group(3), Pattern::Yz);
+        $group!($class.group(4), Pattern::Full);
+    }};
+}
+
+/// The number a product runs in: `f64` (the model's own) or `f32` (half the memory and twice
+/// the lanes; [`Stencil::apply_components`] in either), with its taps and its rows inside along x.
+pub trait Precision:
+    Copy + Default + Send + Sync + std::ops::Add<Output = Self> + std::ops::Mul<Output = Self> + std::ops::AddAssign
+{
+    /// The stencil's taps in this precision.
+    #[doc(hidden)]
+    fn taps(stencil: &Stencil) -> &[ClassTaps<Self>];
+    /// The rows of one class's [`Run`] of nodes into `out[..][l stride]`, `l < len`.
+    #[doc(hidden)]
+    fn run(taps: &ClassTaps<Self>, u: [&[Self]; 3], run: Run, out: [&mut [Self]; 3]);
+}
+
+/// Nodes of one class at even steps: `from + l stride` for `l < len` (a grid row's nodes inside
+/// along x, stride 1, or an x face's nodes inside along y, stride n).
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy)]
+pub struct Run {
+    from: usize,
+    stride: usize,
+    len: usize,
+}
+
+impl Precision for f64 {
+    fn taps(stencil: &Stencil) -> &[ClassTaps<f64>] {
+        &stencil.taps
+    }
+    fn run(taps: &ClassTaps<f64>, u: [&[f64]; 3], run: Run, out: [&mut [f64]; 3]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if run.len >= 4 && std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2, checked just above.
+                unsafe { row_avx2_f64(taps, u, run, out) };
+                return;
+            }
+        }
+        run_scalar(taps, u, run, out);
+    }
+}
+
+impl Precision for f32 {
+    fn taps(stencil: &Stencil) -> &[ClassTaps<f32>] {
+        &stencil.taps_f32
+    }
+    fn run(taps: &ClassTaps<f32>, u: [&[f32]; 3], run: Run, out: [&mut [f32]; 3]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if run.len >= 8 && std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2, checked just above.
+                unsafe { row_avx2_f32(taps, u, run, out) };
+                return;
+            }
+        }
+        run_scalar(taps, u, run, out);
+    }
 }
 
 /// Which off-diagonal entries of a 3x3 block are not zero: none, one symmetric pair, or any.
@@ -41,6 +148,9 @@ enum Pattern {
 }
 
 impl Pattern {
+    /// Every pattern, in the order a class's taps are summed.
+    const ALL: [Pattern; 5] = [Self::Diagonal, Self::Xy, Self::Xz, Self::Yz, Self::Full];
+
     fn of(b: &[f64; 9]) -> Self {
         let coupled = |i: usize, j: usize| b[i] != 0.0 || b[j] != 0.0;
         match (coupled(1, 3), coupled(2, 6), coupled(5, 7)) {
@@ -84,8 +194,10 @@ pub struct Stencil {
     /// `blocks[class][offset]`: the 3x3 block (row-major) coupling a node of `class` with its
     /// neighbour at `offset = (dx + 1) + 3 (dy + 1) + 9 (dz + 1)`.
     blocks: Vec<[[f64; 9]; 27]>,
-    /// `taps[class]`: the neighbours a node of `class` has, in increasing offset.
-    taps: Vec<Vec<Tap>>,
+    /// `taps[class]`: the neighbours a node of `class` has, grouped by pattern.
+    taps: Vec<ClassTaps<f64>>,
+    /// `taps` with each block rounded to `f32`.
+    taps_f32: Vec<ClassTaps<f32>>,
 }
 
 /// The class of index `i` along an axis of `n` nodes: 0 on the low face, 2 on the high one, 1
@@ -100,30 +212,35 @@ fn side(i: usize, n: usize) -> usize {
     }
 }
 
-/// A node's row of `K` times `u`: the sum over its taps, each `b u_q` summed as
-/// `(b0 x + b1 y) + b2 z` per component without its zero terms ([`pattern_rows`]; the order
-/// [`row_avx2`] keeps).
+/// A node's row of `K` times `u`: the sum over its taps, pattern group by pattern group, each
+/// `b u_q` summed as `(b0 x + b1 y) + b2 z` per component without its zero terms
+/// ([`pattern_rows`]; the order [`simd_run`] keeps).
 #[inline(always)]
-fn row_sum(taps: &[Tap], p: usize, load: impl Fn(usize) -> [f64; 3]) -> [f64; 3] {
-    let mut acc = [0.0; 3];
-    for t in taps {
-        let [x, y, z] = load(p.wrapping_add_signed(t.delta));
-        let b = &t.block;
-        macro_rules! m {
-            ($i:expr, $v:expr) => {
-                b[$i] * $v
-            };
-        }
-        macro_rules! a {
-            ($p:expr, $q:expr) => {
-                $p + $q
-            };
-        }
-        let rows = pattern_rows!(t.pattern, x, y, z, m, a);
-        for (acc, r) in acc.iter_mut().zip(rows) {
-            *acc += r;
-        }
+fn row_sum<T: Precision>(class: &ClassTaps<T>, p: usize, load: impl Fn(usize) -> [T; 3]) -> [T; 3] {
+    let mut acc = [T::default(); 3];
+    macro_rules! group {
+        ($taps:expr, $pattern:expr) => {
+            for t in $taps {
+                let [x, y, z] = load(p.wrapping_add_signed(t.delta));
+                let b = &t.block;
+                macro_rules! m {
+                    ($i:expr, $v:expr) => {
+                        b[$i] * $v
+                    };
+                }
+                macro_rules! a {
+                    ($p:expr, $q:expr) => {
+                        $p + $q
+                    };
+                }
+                let rows = pattern_rows!($pattern, x, y, z, m, a);
+                for (acc, r) in acc.iter_mut().zip(rows) {
+                    *acc += r;
+                }
+            }
+        };
     }
+    by_pattern!(class, group);
     acc
 }
 
@@ -169,7 +286,7 @@ impl Stencil {
                 }
             }
         }
-        let taps = (0..27)
+        let taps: Vec<ClassTaps<f64>> = (0..27)
             .map(|class| {
                 let s = [class % 3, (class / 3) % 3, class / 9];
                 (0..27)
@@ -184,10 +301,12 @@ impl Stencil {
                         let block = blocks[class][o];
                         Tap { delta: d[0] + n * d[1] + n * n * d[2], block, pattern: Pattern::of(&block) }
                     })
-                    .collect()
+                    .collect::<Vec<_>>()
             })
+            .map(|class| ClassTaps::grouped(&class))
             .collect();
-        Self { n, blocks, taps }
+        let taps_f32 = taps.iter().map(|class| class.map(|b| b as f32)).collect();
+        Self { n, blocks, taps, taps_f32 }
     }
 
     /// `blocks()[class][offset]`: the 3x3 block (row-major) coupling a node of `class` (`sx + 3 sy
@@ -238,14 +357,15 @@ impl Stencil {
     }
 
     /// `out[c] = (K u)[c]` with both component-wise (`u[c][node]`), slab by slab of constant z
-    /// over the physics pool on a large enough grid: the same bits as [`Stencil::apply`].
-    /// Allocates nothing.
-    pub fn apply_components(&self, u: &[Vec<f64>; 3], out: &mut [Vec<f64>; 3]) {
+    /// over the physics pool on a large enough grid: in `f64` the same bits as
+    /// [`Stencil::apply`]; in `f32` the same sums with the blocks rounded to `f32`. Allocates
+    /// nothing.
+    pub fn apply_components<T: Precision>(&self, u: &[Vec<T>; 3], out: &mut [Vec<T>; 3]) {
         self.apply_components_on(u, out, true);
     }
 
     /// [`Stencil::apply_components`], on the calling thread alone unless `parallel`.
-    pub fn apply_components_on(&self, u: &[Vec<f64>; 3], out: &mut [Vec<f64>; 3], parallel: bool) {
+    pub fn apply_components_on<T: Precision>(&self, u: &[Vec<T>; 3], out: &mut [Vec<T>; 3], parallel: bool) {
         let plane = self.n * self.n;
         let u = [&u[0][..], &u[1][..], &u[2][..]];
         let [o0, o1, o2] = out;
@@ -269,117 +389,209 @@ impl Stencil {
 
     /// The rows of the slab `z = k` into `out` (that slab's part of `K u`), component-wise: the
     /// nodes on the x faces one by one, those between them as one run of a class.
-    fn components_slab(&self, u: [&[f64]; 3], k: usize, out: [&mut [f64]; 3]) {
-        let n = self.n;
+    fn components_slab<T: Precision>(&self, u: [&[T]; 3], k: usize, out: [&mut [T]; 3]) {
+        let (n, taps) = (self.n, T::taps(self));
         let load = |q: usize| [u[0][q], u[1][q], u[2][q]];
         let [o0, o1, o2] = out;
-        for j in 0..n {
-            let row_class = 3 * side(j, n) + 9 * side(k, n);
-            let first = n * (j + n * k);
-            for i in [0, n - 1] {
-                let acc = row_sum(&self.taps[side(i, n) + row_class], first + i, load);
+        let plane = n * n * k;
+        for i in [0, n - 1] {
+            for j in [0, n - 1] {
+                let acc = row_sum(&taps[side(i, n) + 3 * side(j, n) + 9 * side(k, n)], plane + n * j + i, load);
                 (o0[n * j + i], o1[n * j + i], o2[n * j + i]) = (acc[0], acc[1], acc[2]);
             }
             if n > 2 {
+                // The x face's nodes inside along y, n apart.
+                let class = &taps[side(i, n) + 3 + 9 * side(k, n)];
+                let at = n + i..;
+                let run = Run { from: plane + n + i, stride: n, len: n - 2 };
+                T::run(class, u, run, [&mut o0[at.clone()], &mut o1[at.clone()], &mut o2[at]]);
+            }
+        }
+        if n > 2 {
+            for j in 0..n {
                 let at = n * j + 1..n * j + n - 1;
-                let run = [&mut o0[at.clone()], &mut o1[at.clone()], &mut o2[at]];
-                inside_run(&self.taps[1 + row_class], u, first + 1, run);
+                let run = Run { from: plane + n * j + 1, stride: 1, len: n - 2 };
+                let class = &taps[1 + 3 * side(j, n) + 9 * side(k, n)];
+                T::run(class, u, run, [&mut o0[at.clone()], &mut o1[at.clone()], &mut o2[at]]);
             }
         }
     }
 }
 
-/// The rows of the nodes `from..from + out[0].len()` of one class (a grid row's nodes inside
-/// along x) into `out`, component-wise.
-fn inside_run(taps: &[Tap], u: [&[f64]; 3], from: usize, out: [&mut [f64]; 3]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if out[0].len() >= 4 && std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
-            unsafe { row_avx2(taps, u, from, out) };
-            return;
-        }
-    }
+/// The rows of a [`Run`] into `out[..][l stride]`, one node at a time.
+fn run_scalar<T: Precision>(taps: &ClassTaps<T>, u: [&[T]; 3], run: Run, out: [&mut [T]; 3]) {
     let load = |q: usize| [u[0][q], u[1][q], u[2][q]];
     let [o0, o1, o2] = out;
-    for s in 0..o0.len() {
-        let acc = row_sum(taps, from + s, load);
-        (o0[s], o1[s], o2[s]) = (acc[0], acc[1], acc[2]);
+    for l in 0..run.len {
+        let acc = row_sum(taps, run.from + l * run.stride, load);
+        let at = l * run.stride;
+        (o0[at], o1[at], o2[at]) = (acc[0], acc[1], acc[2]);
     }
 }
 
-/// [`inside_run`] eight nodes at a time (two registers, each of a tap's entries broadcast once
-/// for both), then four, the last group overlapping the ones before where the run is not a
-/// multiple of four (the same sums written twice); at least four nodes. No fused multiply-add,
-/// so every node's sum has the bits of [`row_sum`].
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn row_avx2(taps: &[Tap], u: [&[f64]; 3], from: usize, out: [&mut [f64]; 3]) {
-    let len = out[0].len();
-    debug_assert!(len >= 4 && out.iter().all(|o| o.len() == len));
-    let [o0, o1, o2] = out;
-    let mut s = 0;
-    while s + 8 <= len {
-        // SAFETY: the caller's CPU supports AVX2 (this function's own feature).
-        unsafe { group_avx2::<2>(taps, u, from, s, [&mut *o0, &mut *o1, &mut *o2]) };
-        s += 8;
-    }
-    while s < len {
-        let start = s.min(len - 4);
-        // SAFETY: as above.
-        unsafe { group_avx2::<1>(taps, u, from, start, [&mut *o0, &mut *o1, &mut *o2]) };
-        s = start + 4;
-    }
+/// A [`Run`]'s rows with AVX2, `W` nodes a register (4 in `f64`, 8 in `f32`): along x two
+/// registers at a time (each of a tap's entries broadcast once for both), then one; along y
+/// one, gathered; the last group overlapping the ones before where the run is not a multiple of
+/// `W` (the same sums written twice); at least `W` nodes. No fused multiply-add, so every node's
+/// sum has the bits of [`row_sum`].
+macro_rules! simd_run {
+    ($run:ident, $group:ident, $gather:ident, $t:ty, $w:expr, $vec:ident, $zero:ident, $set1:ident,
+     $load:ident, $store:ident, $mul:ident, $add:ident) => {
+        /// The rows of a run ([`simd_run`]).
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        unsafe fn $run(taps: &ClassTaps<$t>, u: [&[$t]; 3], run: Run, out: [&mut [$t]; 3]) {
+            debug_assert!(run.len >= $w && out.iter().all(|o| o.len() > (run.len - 1) * run.stride));
+            let [o0, o1, o2] = out;
+            let mut s = 0;
+            if run.stride == 1 {
+                while s + 2 * $w <= run.len {
+                    // SAFETY: the caller's CPU supports AVX2 (this function's own feature).
+                    unsafe { $group::<2, false>(taps, u, run, s, [&mut *o0, &mut *o1, &mut *o2]) };
+                    s += 2 * $w;
+                }
+            }
+            while s < run.len {
+                let start = s.min(run.len - $w);
+                // SAFETY: as above.
+                unsafe {
+                    if run.stride == 1 {
+                        $group::<1, false>(taps, u, run, start, [&mut *o0, &mut *o1, &mut *o2]);
+                    } else {
+                        $group::<1, true>(taps, u, run, start, [&mut *o0, &mut *o1, &mut *o2]);
+                    }
+                }
+                s = start + $w;
+            }
+        }
+
+        /// The rows of the `W V` nodes `start..` of `run` into `out[..][start stride..]`
+        /// (`STRIDED`: gathered `stride` apart, else contiguous).
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        #[inline]
+        unsafe fn $group<const V: usize, const STRIDED: bool>(
+            taps: &ClassTaps<$t>,
+            u: [&[$t]; 3],
+            run: Run,
+            start: usize,
+            out: [&mut [$t]; 3],
+        ) {
+            use std::arch::x86_64::{$add, $load, $mul, $set1, $store, $vec, $zero};
+            let (p, stride) = (run.from + start * run.stride, run.stride);
+            // The span of one register's nodes in `u`.
+            let span = if STRIDED { stride * ($w - 1) + 1 } else { $w * V };
+            let mut acc: [[$vec; 3]; V] = [[$zero(); 3]; V];
+            macro_rules! group {
+                ($taps:expr, $pattern:expr) => {
+                    for t in $taps {
+                        let q = p.wrapping_add_signed(t.delta);
+                        // One tap's neighbours of the group: bounds-checked once as slices.
+                        let (x, y, z) = (&u[0][q..q + span], &u[1][q..q + span], &u[2][q..q + span]);
+                        let b = &t.block;
+                        macro_rules! m {
+                            ($i:expr, $v:expr) => {
+                                $mul($set1(b[$i]), $v)
+                            };
+                        }
+                        macro_rules! a {
+                            ($p:expr, $q:expr) => {
+                                $add($p, $q)
+                            };
+                        }
+                        for (w, acc) in acc.iter_mut().enumerate() {
+                            // SAFETY: contiguous, each slice holds W V values and `W w + W <= W
+                            // V`; strided (V = 1), the W values `stride` apart end at the last.
+                            let (x, y, z) = unsafe {
+                                if STRIDED {
+                                    ($gather(x.as_ptr(), stride), $gather(y.as_ptr(), stride), $gather(z.as_ptr(), stride))
+                                } else {
+                                    (
+                                        $load(x.as_ptr().add($w * w)),
+                                        $load(y.as_ptr().add($w * w)),
+                                        $load(z.as_ptr().add($w * w)),
+                                    )
+                                }
+                            };
+                            let rows = pattern_rows!($pattern, x, y, z, m, a);
+                            for (a, r) in acc.iter_mut().zip(rows) {
+                                *a = $add(*a, r);
+                            }
+                        }
+                    }
+                };
+            }
+            by_pattern!(taps, group);
+            for (c, o) in out.into_iter().enumerate() {
+                if STRIDED {
+                    let mut lanes = [<$t>::default(); $w];
+                    // SAFETY: `lanes` holds W values.
+                    unsafe { $store(lanes.as_mut_ptr(), acc[0][c]) };
+                    for (l, v) in lanes.into_iter().enumerate() {
+                        o[(start + l) * stride] = v;
+                    }
+                } else {
+                    let d = &mut o[start..start + $w * V];
+                    for (w, acc) in acc.iter().enumerate() {
+                        // SAFETY: `d` holds exactly W V values, just checked, and `W w + W <= W V`.
+                        unsafe { $store(d.as_mut_ptr().add($w * w), acc[c]) };
+                    }
+                }
+            }
+        }
+    };
 }
 
-/// The rows of the `4 V` nodes `from + start..` into `out[..][start..]` ([`row_avx2`]).
+/// `W = 4` values `stride` apart from `p`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn group_avx2<const V: usize>(taps: &[Tap], u: [&[f64]; 3], from: usize, start: usize, out: [&mut [f64]; 3]) {
-    use std::arch::x86_64::{
-        __m256d, _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_setzero_pd, _mm256_storeu_pd,
-    };
-    let p = from + start;
-    let mut acc: [[__m256d; 3]; V] = [[_mm256_setzero_pd(); 3]; V];
-    for t in taps {
-        let q = p.wrapping_add_signed(t.delta);
-        // The 4 V neighbours of one tap are contiguous: bounds-checked once as slices.
-        let (x, y, z) = (&u[0][q..q + 4 * V], &u[1][q..q + 4 * V], &u[2][q..q + 4 * V]);
-        let b = &t.block;
-        macro_rules! m {
-            ($i:expr, $v:expr) => {
-                _mm256_mul_pd(_mm256_set1_pd(b[$i]), $v)
-            };
-        }
-        macro_rules! a {
-            ($p:expr, $q:expr) => {
-                _mm256_add_pd($p, $q)
-            };
-        }
-        for (w, acc) in acc.iter_mut().enumerate() {
-            // SAFETY: each slice holds exactly 4 V values, just checked, and `4 w + 4 <= 4 V`.
-            let (x, y, z) = unsafe {
-                (
-                    _mm256_loadu_pd(x.as_ptr().add(4 * w)),
-                    _mm256_loadu_pd(y.as_ptr().add(4 * w)),
-                    _mm256_loadu_pd(z.as_ptr().add(4 * w)),
-                )
-            };
-            let rows = pattern_rows!(t.pattern, x, y, z, m, a);
-            for (a, r) in acc.iter_mut().zip(rows) {
-                *a = _mm256_add_pd(*a, r);
-            }
-        }
-    }
-    for (c, o) in out.into_iter().enumerate() {
-        let d = &mut o[start..start + 4 * V];
-        for (w, acc) in acc.iter().enumerate() {
-            // SAFETY: `d` holds exactly 4 V values, just checked, and `4 w + 4 <= 4 V`.
-            unsafe { _mm256_storeu_pd(d.as_mut_ptr().add(4 * w), acc[c]) };
-        }
-    }
+unsafe fn gather_f64(p: *const f64, stride: usize) -> std::arch::x86_64::__m256d {
+    use std::arch::x86_64::{_mm_setr_epi32, _mm256_i32gather_pd};
+    let s = stride as i32;
+    // SAFETY: the caller's values are in one slice (its bounds checked).
+    unsafe { _mm256_i32gather_pd::<8>(p, _mm_setr_epi32(0, s, 2 * s, 3 * s)) }
 }
+
+/// `W = 8` values `stride` apart from `p`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn gather_f32(p: *const f32, stride: usize) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::{_mm256_i32gather_ps, _mm256_setr_epi32};
+    let s = stride as i32;
+    // SAFETY: the caller's values are in one slice (its bounds checked).
+    unsafe { _mm256_i32gather_ps::<4>(p, _mm256_setr_epi32(0, s, 2 * s, 3 * s, 4 * s, 5 * s, 6 * s, 7 * s)) }
+}
+
+simd_run!(
+    row_avx2_f64,
+    group_avx2_f64,
+    gather_f64,
+    f64,
+    4,
+    __m256d,
+    _mm256_setzero_pd,
+    _mm256_set1_pd,
+    _mm256_loadu_pd,
+    _mm256_storeu_pd,
+    _mm256_mul_pd,
+    _mm256_add_pd
+);
+simd_run!(
+    row_avx2_f32,
+    group_avx2_f32,
+    gather_f32,
+    f32,
+    8,
+    __m256,
+    _mm256_setzero_ps,
+    _mm256_set1_ps,
+    _mm256_loadu_ps,
+    _mm256_storeu_ps,
+    _mm256_mul_ps,
+    _mm256_add_ps
+);
 
 #[cfg(test)]
 mod tests {
@@ -424,6 +636,39 @@ mod tests {
                 for p in 0..nn {
                     for c in 0..3 {
                         assert_eq!(out[c][p].to_bits(), interleaved[3 * p + c].to_bits(), "n = {n}, node {p}, {c}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_f32_product_is_its_scalar_rows_and_near_the_f64_one() {
+        let material = Material::object_b();
+        // Runs inside along x of 3, 6, 8, 9, 14, 16, 17 and 22 nodes (the AVX2 path from 8, in
+        // groups of sixteen from 16, the last eight overlapping), and 16^3 split over the pool.
+        for n in [5, 8, 10, 11, 16, 18, 19, 24] {
+            let grid = Grid::new(n).unwrap();
+            let fem = super::super::FemModel::new(grid, &material);
+            let stencil = Stencil::new(&grid, &fem.ke);
+            let nn = grid.num_nodes();
+            let u: [Vec<f64>; 3] =
+                std::array::from_fn(|c| (0..nn).map(|p| (((3 * p + c) * 7919) % 101) as f64 * 1e-5 - 5e-4).collect());
+            let u32: [Vec<f32>; 3] = std::array::from_fn(|c| u[c].iter().map(|&v| v as f32).collect());
+            let mut exact: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
+            stencil.apply_components_on(&u, &mut exact, false);
+            let scale = exact.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+            let load = |q: usize| [u32[0][q], u32[1][q], u32[2][q]];
+            for parallel in [false, true] {
+                let mut out: [Vec<f32>; 3] = std::array::from_fn(|_| vec![f32::NAN; nn]);
+                stencil.apply_components_on(&u32, &mut out, parallel);
+                for p in 0..nn {
+                    let (i, j, k) = (p % n, (p / n) % n, p / (n * n));
+                    let row = row_sum(&stencil.taps_f32[side(i, n) + 3 * side(j, n) + 9 * side(k, n)], p, load);
+                    for c in 0..3 {
+                        assert_eq!(out[c][p].to_bits(), row[c].to_bits(), "n = {n}, node {p}, {c}");
+                        let off = (f64::from(out[c][p]) - exact[c][p]).abs();
+                        assert!(off <= 1e-5 * scale, "n = {n}, node {p}, {c}: {off:e} of {scale:e}");
                     }
                 }
             }

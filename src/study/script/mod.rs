@@ -88,8 +88,9 @@ pub struct Script {
     /// The probe's contact (default `surface`, the viewer's).
     #[serde(default)]
     pub contact: Contact,
-    /// Where the steps are computed: `cpu` (default) or `gpu` (symplectic Euler of the lattices
-    /// and the linear FEM in f32, [`crate::gpu`]).
+    /// Where the steps are computed: `cpu` (default), `cpu-f32` (the linear FEM's symplectic
+    /// step with its force in f32) or `gpu` (symplectic Euler of the lattices and the linear FEM
+    /// in f32, [`crate::gpu`]).
     #[serde(default)]
     pub compute: Compute,
     /// The actions, in order.
@@ -290,12 +291,8 @@ impl Outcome {
     }
 }
 
-/// Runs a script.
-pub fn run(script: &Script) -> anyhow::Result<Outcome> {
-    let material = Material::preset(&script.object)
-        .ok_or_else(|| anyhow::anyhow!("script: object must be A or B, got {:?}", script.object))?;
-    check_script(script)?;
-    let grid = Grid::new(script.nodes)?;
+/// The script's model of `material` on `grid`, damped as it says, where it computes.
+fn tissue(script: &Script, grid: Grid, material: &Material) -> anyhow::Result<Box<dyn crate::sim::Tissue>> {
     if script.damping_ratio.is_some() && !script.model.takes_damping_ratio() {
         anyhow::bail!(
             "script: \"damping_ratio\" is not for the axis lattice: {}",
@@ -303,8 +300,17 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         );
     }
     let zeta = script.damping_ratio.unwrap_or(crate::response::damping::DEFAULT_DAMPING_RATIO);
-    let tissue = script.model.build_on(grid, &material, None, zeta).map_err(|e| anyhow::anyhow!("script: {e:#}"))?;
-    let tissue = script.compute.place(tissue).map_err(|e| anyhow::anyhow!("script: compute \"gpu\": {e}"))?;
+    let tissue = script.model.build_on(grid, material, None, zeta).map_err(|e| anyhow::anyhow!("script: {e:#}"))?;
+    script.compute.place(tissue).map_err(|e| anyhow::anyhow!("script: compute \"{}\": {e}", script.compute.name()))
+}
+
+/// Runs a script.
+pub fn run(script: &Script) -> anyhow::Result<Outcome> {
+    let material = Material::preset(&script.object)
+        .ok_or_else(|| anyhow::anyhow!("script: object must be A or B, got {:?}", script.object))?;
+    check_script(script)?;
+    let grid = Grid::new(script.nodes)?;
+    let tissue = tissue(script, grid, &material)?;
     let case = clamp_case(&grid, &material.name, &script.clamp)?;
     let mut sim = Simulation::with_tissue(tissue, Integrator::Symplectic, script.dt, case.as_ref());
     // The viewer's step policy: refused before the first step.
@@ -312,10 +318,11 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         anyhow::anyhow!("script: {why}; lower dt, or leave \"integrator\" out (the automatic choice substeps dt)")
     })?;
     let integrator = sim.integrator;
-    if script.compute == Compute::Gpu && integrator != Integrator::Symplectic {
+    if script.compute != Compute::Cpu && integrator != Integrator::Symplectic {
         anyhow::bail!(
-            "script: compute \"gpu\" steps with symplectic Euler only, and at dt {} s the step policy chose {}: \
+            "script: compute \"{}\" is for symplectic Euler only, and at dt {} s the step policy chose {}: \
              lower dt, or set \"integrator\": \"symplectic\"",
+            script.compute.name(),
             crate::io::num(script.dt),
             integrator.name()
         );
