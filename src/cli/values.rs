@@ -75,7 +75,7 @@ value_enum!(Integrator {
 });
 value_enum!(Compute {
     Cpu => "cpu", "The CPU, in f64";
-    CpuF32 => "cpu-f32", "The CPU, the linear FEM's symplectic step with its force summed in f32";
+    CpuF32 => "cpu-f32", "The CPU, the symplectic step of the lattices and the linear FEM with its force summed in f32";
     Gpu => "gpu", "Symplectic steps of the lattices and the linear FEM as wgpu compute shaders, in f32";
 });
 value_enum!(Metric {

@@ -26,7 +26,7 @@ pub enum Compute {
     /// The CPU, in f64.
     #[default]
     Cpu,
-    /// The CPU, the symplectic step's internal force summed in f32 (the linear FEM;
+    /// The CPU, the symplectic step's internal force summed in f32 (the lattices and the linear FEM;
     /// [`crate::sim::Tissue::set_single_precision`]).
     #[serde(rename = "cpu-f32")]
     CpuF32,

@@ -214,7 +214,8 @@ impl Tissue for FemTissue {
     }
     fn set_single_precision(&mut self, single: bool) -> Result<(), String> {
         if single && self.dynamics.formulation != Formulation::Linear {
-            return Err("the corotational FEM has no f32 step (its rotations need f64): the linear FEM has one".into());
+            return Err("the corotational FEM has no f32 step (its rotations are per element): the lattices and the linear FEM \
+                        have one".into());
         }
         let nn = if single { self.free.len() } else { 0 };
         self.single = single;

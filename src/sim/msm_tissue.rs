@@ -136,6 +136,10 @@ impl Tissue for MsmTissue {
     fn kinetic_energy(&self) -> f64 {
         self.dynamics.kinetic_energy(&self.model)
     }
+    fn set_single_precision(&mut self, single: bool) -> Result<(), String> {
+        self.dynamics.set_single_precision(&self.model, single);
+        Ok(())
+    }
     fn carries_contact_loads(&self) -> bool {
         self.model.params.topology() != crate::mechanics::msm::Topology::Axis
     }

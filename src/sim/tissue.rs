@@ -102,7 +102,7 @@ pub trait Tissue: Send + std::fmt::Debug {
     /// Sums its symplectic step's internal force in `f32` (`single`) or in `f64` (the default),
     /// the rest of the step in `f64`; refused, saying why, by a model without an `f32` force.
     fn set_single_precision(&mut self, single: bool) -> Result<(), String> {
-        if single { Err("this model has no f32 step: the linear FEM has one".into()) } else { Ok(()) }
+        if single { Err("this model has no f32 step: the lattices and the linear FEM have one".into()) } else { Ok(()) }
     }
     /// Its symplectic Euler step as plain numbers (for the GPU's step), or why it has none.
     fn explicit_form(&self) -> Result<super::explicit_form::ExplicitForm, String>;

@@ -132,7 +132,7 @@ pub fn run() -> anyhow::Result<Sweep> {
     for model in Model::ALL {
         for nodes in SWEEP_NODES {
             let on_gpu = model != Model::Fem(crate::mechanics::fem::dynamics::Formulation::Corotational);
-            let f32_force = model == Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear);
+            let f32_force = on_gpu;
             for compute in [Compute::Cpu, Compute::CpuF32, Compute::Gpu] {
                 if (compute == Compute::Gpu && !(gpu.is_ok() && on_gpu)) || (compute == Compute::CpuF32 && !f32_force) {
                     continue;

@@ -50,16 +50,18 @@ fn skipped() -> bool {
 
 #[test]
 fn the_cpu_f32_force_follows_the_f64_step() {
-    for nodes in [8, 11, 16] {
-        let cpu = run(&script("fem-linear", nodes, "cpu")).expect("the f64 run");
-        let single = run(&script("fem-linear", nodes, "cpu-f32")).expect("the f32 run");
+    for (model, nodes) in
+        [("fem-linear", 8), ("fem-linear", 11), ("fem-linear", 16), ("hex", 8), ("shear", 11), ("axis", 8)]
+    {
+        let cpu = run(&script(model, nodes, "cpu")).expect("the f64 run");
+        let single = run(&script(model, nodes, "cpu-f32")).expect("the f32 run");
         assert_eq!(single.steps, cpu.steps);
         let (apart, scale) = apart(&cpu, &single);
-        assert!(scale > 1e-4, "{nodes}^3 moved only {scale} m");
-        assert!(apart <= TOLERANCE * scale, "{nodes}^3: the runs part by {apart} m of {scale} m");
-        assert!(apart > 0.0, "{nodes}^3: the f32 run is the f64 one");
+        assert!(scale > 1e-4, "{model} {nodes}^3 moved only {scale} m");
+        assert!(apart <= TOLERANCE * scale, "{model} {nodes}^3: the runs part by {apart} m of {scale} m");
+        assert!(apart > 0.0, "{model} {nodes}^3: the f32 run is the f64 one");
     }
-    let refused = run(&script("hex", 8, "cpu-f32")).expect_err("the lattices have no f32 force");
+    let refused = run(&script("fem-corotational", 8, "cpu-f32")).expect_err("the corotational FEM has no f32 force");
     assert!(format!("{refused:#}").contains("no f32 step"), "{refused:#}");
 }
 

@@ -8,6 +8,7 @@ pub mod dynamics;
 pub mod forces;
 pub mod model;
 pub mod reduction;
+pub mod single;
 pub mod statics;
 
 pub use dynamics::Dynamics;

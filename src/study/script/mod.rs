@@ -88,7 +88,7 @@ pub struct Script {
     /// The probe's contact (default `surface`, the viewer's).
     #[serde(default)]
     pub contact: Contact,
-    /// Where the steps are computed: `cpu` (default), `cpu-f32` (the linear FEM's symplectic
+    /// Where the steps are computed: `cpu` (default), `cpu-f32` (the lattices' and the linear FEM's symplectic
     /// step with its force in f32) or `gpu` (symplectic Euler of the lattices and the linear FEM
     /// in f32, [`crate::gpu`]).
     #[serde(default)]
