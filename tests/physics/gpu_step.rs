@@ -39,6 +39,18 @@ fn apart(cpu: &Outcome, gpu: &Outcome) -> (f64, f64) {
     (apart, scale)
 }
 
+/// The script of `model` on `nodes`^3 run on the CPU in f64 and with `compute`: the same steps,
+/// and the final positions within [`TOLERANCE`] of the f64 run's largest displacement.
+fn follows(model: &str, nodes: usize, compute: &str) -> (Outcome, Outcome) {
+    let cpu = run(&script(model, nodes, "cpu")).expect("the f64 CPU run");
+    let other = run(&script(model, nodes, compute)).expect("the other run");
+    assert_eq!(other.steps, cpu.steps);
+    let (apart, scale) = apart(&cpu, &other);
+    assert!(scale > 1e-4, "{model} {nodes}^3 moved only {scale} m");
+    assert!(apart <= TOLERANCE * scale, "{model} {nodes}^3 {compute}: the runs part by {apart} m of {scale} m");
+    (cpu, other)
+}
+
 /// Whether a test that needs an adapter skips: none here and not in CI (which requires one).
 fn skipped() -> bool {
     let none = tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none();
@@ -53,13 +65,8 @@ fn the_cpu_f32_force_follows_the_f64_step() {
     for (model, nodes) in
         [("fem-linear", 8), ("fem-linear", 11), ("fem-linear", 16), ("hex", 8), ("shear", 11), ("axis", 8)]
     {
-        let cpu = run(&script(model, nodes, "cpu")).expect("the f64 run");
-        let single = run(&script(model, nodes, "cpu-f32")).expect("the f32 run");
-        assert_eq!(single.steps, cpu.steps);
-        let (apart, scale) = apart(&cpu, &single);
-        assert!(scale > 1e-4, "{model} {nodes}^3 moved only {scale} m");
-        assert!(apart <= TOLERANCE * scale, "{model} {nodes}^3: the runs part by {apart} m of {scale} m");
-        assert!(apart > 0.0, "{model} {nodes}^3: the f32 run is the f64 one");
+        let (cpu, single) = follows(model, nodes, "cpu-f32");
+        assert!(apart(&cpu, &single).0 > 0.0, "{model} {nodes}^3: the f32 run is the f64 one");
     }
     let refused = run(&script("fem-corotational", 8, "cpu-f32")).expect_err("the corotational FEM has no f32 force");
     assert!(format!("{refused:#}").contains("no f32 step"), "{refused:#}");
@@ -71,12 +78,7 @@ fn the_gpu_step_follows_the_cpu_step() {
         return;
     }
     for (model, nodes) in [("hex", 8), ("shear", 8), ("axis", 8), ("fem-linear", 8), ("hex", 11), ("fem-linear", 11)] {
-        let cpu = run(&script(model, nodes, "cpu")).expect("the CPU run");
-        let gpu = run(&script(model, nodes, "gpu")).expect("the GPU run");
-        assert_eq!(gpu.steps, cpu.steps);
-        let (apart, scale) = apart(&cpu, &gpu);
-        assert!(scale > 1e-4, "{model} {nodes}^3 moved only {scale} m");
-        assert!(apart <= TOLERANCE * scale, "{model} {nodes}^3: the runs part by {apart} m of {scale} m");
+        let (cpu, gpu) = follows(model, nodes, "gpu");
         let (f_cpu, f_gpu) = (cpu.force_depth.last().expect("samples"), gpu.force_depth.last().expect("samples"));
         assert!(
             (f_cpu.force_n - f_gpu.force_n).abs() <= 1e-3 * f_cpu.force_n.abs().max(0.01),
