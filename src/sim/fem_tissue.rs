@@ -30,9 +30,8 @@ pub struct FemTissue {
     free: Vec<f64>,
     /// The displacement buffer of the component-wise step.
     u: [Vec<f64>; 3],
-    /// The linear FEM's symplectic step takes `K u` in `f32` ([`Tissue::set_single_precision`]).
-    single: bool,
-    /// `u` and `K u` in `f32`, for that step (empty unless `single`).
+    /// `u` and `K u` in `f32` for the linear FEM's symplectic step, which takes `K u` in `f32`
+    /// where they are sized ([`Tissue::set_single_precision`]; empty otherwise).
     u_f32: [Vec<f32>; 3],
     ku_f32: [Vec<f32>; 3],
     /// 1.0 for a free dof, 0.0 for a fixed one, component-wise.
@@ -64,7 +63,6 @@ impl FemTissue {
             forces: std::array::from_fn(|_| vec![0.0; nn]),
             free: vec![1.0; nn],
             u: std::array::from_fn(|_| vec![0.0; nn]),
-            single: false,
             u_f32: Default::default(),
             ku_f32: Default::default(),
             free_dofs: split(&dynamics.free),
@@ -94,7 +92,7 @@ impl FemTissue {
     /// of [`FemDynamics::step_symplectic`] in the same order (the same bits): `u = x - X`,
     /// `v = (v + dt ((f_ext - K u) m^-1 - alpha v)) free`, `x += dt v`. Allocation-free.
     pub fn step_linear_symplectic(&mut self, dt: f64) {
-        if self.single {
+        if !self.u_f32[0].is_empty() {
             return self.step_linear_symplectic_f32(dt);
         }
         let d = &self.dynamics;
@@ -218,7 +216,6 @@ impl Tissue for FemTissue {
                         have one".into());
         }
         let nn = if single { self.free.len() } else { 0 };
-        self.single = single;
         for buffer in self.u_f32.iter_mut().chain(&mut self.ku_f32) {
             buffer.resize(nn, 0.0);
         }
