@@ -9,7 +9,7 @@ use clap::Args;
 use super::args::{ObjectArgs, params_from_file};
 use super::output::{say, say_raw};
 use crate::mechanics::grid::Grid;
-use crate::sim::{Integrator, Model, StepLimit};
+use crate::sim::{Integrator, Model};
 use crate::validate::{dynamic_measure, dynamic_reference};
 
 /// The flags of `dynamics`.
@@ -71,7 +71,7 @@ pub fn run(args: DynamicsArgs) -> anyhow::Result<()> {
     let (integrator, dt, note) = crate::sim::choose_step(
         integrator,
         dt,
-        StepLimit::tissue(tissue.explicit_dt_limit()),
+        tissue.step_limit(),
         tissue.damping(),
         crate::sim::DEFAULT_DYNAMIC_BUDGET,
     )

@@ -180,6 +180,9 @@ impl Tissue for GpuTissue {
     fn explicit_dt_limit(&self) -> f64 {
         self.inner.explicit_dt_limit()
     }
+    fn step_limit(&self) -> crate::sim::StepLimit {
+        self.inner.step_limit()
+    }
     fn apply_case(&mut self, case: &LoadCase) {
         self.before_write();
         self.inner.apply_case(case);

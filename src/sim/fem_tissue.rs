@@ -106,26 +106,15 @@ impl FemTissue {
     }
 
     /// [`FemTissue::step_linear_symplectic`] with `u` rounded to `f32` and `K u` summed in `f32`
-    /// (the stencil's blocks rounded too), the rest in `f64`. Allocation-free.
+    /// (the stencil's blocks rounded too), the rest in `f64`; with AVX2 where the CPU has it.
+    /// Allocation-free.
     fn step_linear_symplectic_f32(&mut self, dt: f64) {
-        let d = &self.dynamics;
-        for c in 0..3 {
-            for ((u, x), r) in self.u_f32[c].iter_mut().zip(&self.x[c]).zip(&d.rest_components()[c]) {
-                *u = (x - r) as f32;
-            }
-        }
-        d.model.stencil().apply_components(&self.u_f32, &mut self.ku_f32);
-        let (alpha, n) = (d.alpha, self.inv_mass.len());
-        for c in 0..3 {
-            // Every slice cut to `n`: no bounds checks, so the loop vectorises.
-            let (x, v, f) = (&mut self.x[c][..n], &mut self.v[c][..n], &mut self.forces[c][..n]);
-            let (f_ext, ku, free, inv_mass) =
-                (&self.f_ext[c][..n], &self.ku_f32[c][..n], &self.free_dofs[c][..n], &self.inv_mass[..n]);
-            for p in 0..n {
-                f[p] = f_ext[p] - f64::from(ku[p]);
-                symplectic_update(&mut x[p], &mut v[p], f[p] * inv_mass[p], alpha, free[p], dt);
-            }
-        }
+        let tissue = self;
+        crate::mechanics::msm::forces::dispatch_avx2!(
+            linear_f32_step,
+            linear_f32_step_avx2,
+            (tissue: &mut FemTissue, dt: f64)
+        );
     }
 
     /// One symplectic Euler step of the corotational FEM on the component-wise state, the
@@ -161,6 +150,29 @@ impl FemTissue {
                 self.x[c][p] = self.dynamics.x[3 * p + c];
                 self.v[c][p] = self.dynamics.v[3 * p + c];
             }
+        }
+    }
+}
+
+/// The body of [`FemTissue::step_linear_symplectic_f32`], inlined into its AVX2 and plain
+/// copies. The total force is not kept: [`Tissue::forces`] computes it when asked.
+#[inline(always)]
+fn linear_f32_step(t: &mut FemTissue, dt: f64) {
+    let (d, n) = (&t.dynamics, t.inv_mass.len());
+    for c in 0..3 {
+        // Every slice cut to `n`: no bounds checks, so the loops vectorise.
+        let (u, x, r) = (&mut t.u_f32[c][..n], &t.x[c][..n], &d.rest_components()[c][..n]);
+        for p in 0..n {
+            u[p] = (x[p] - r[p]) as f32;
+        }
+    }
+    d.model.stencil().apply_components(&t.u_f32, &mut t.ku_f32);
+    let alpha = d.alpha;
+    for c in 0..3 {
+        let (x, v) = (&mut t.x[c][..n], &mut t.v[c][..n]);
+        let (f_ext, ku, free, inv_mass) = (&t.f_ext[c][..n], &t.ku_f32[c][..n], &t.free_dofs[c][..n], &t.inv_mass[..n]);
+        for p in 0..n {
+            symplectic_update(&mut x[p], &mut v[p], (f_ext[p] - f64::from(ku[p])) * inv_mass[p], alpha, free[p], dt);
         }
     }
 }
@@ -297,6 +309,12 @@ impl Tissue for FemTissue {
     fn explicit_dt_limit(&self) -> f64 {
         self.dt_limit
     }
+    fn step_limit(&self) -> super::integrator::StepLimit {
+        match self.dynamics.formulation {
+            Formulation::Linear => super::integrator::StepLimit::constant_stiffness(self.dt_limit),
+            Formulation::Corotational => super::integrator::StepLimit::tissue(self.dt_limit),
+        }
+    }
     fn apply_case(&mut self, case: &LoadCase) {
         self.copy_in();
         self.dynamics.apply_case(case);
@@ -386,6 +404,36 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The linear FEM runs to [`crate::sim::MAX_EXPLICIT_FRACTION`] of its limit under the
+    /// automatic choice ([`Tissue::step_limit`]): from random velocities, undamped, its kinetic
+    /// energy stays under the start's there, and grows without bound just above the limit (the
+    /// limit is tight, so the fraction is the whole margin).
+    #[test]
+    fn the_linear_fem_is_stable_at_the_named_fraction_of_its_limit() {
+        let material = crate::mechanics::material::Material::object_a();
+        let peak = |fraction: f64| {
+            let mut tissue = FemTissue::new(Grid::new(10).unwrap(), &material, Formulation::Linear);
+            assert!(tissue.step_limit().constant_stiffness);
+            let mut seed = 12345u64;
+            for v in tissue.v_mut().iter_mut().flatten() {
+                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                *v = ((seed >> 33) as f64 / 2f64.powi(31) - 0.5) * 1e-3;
+            }
+            let start = tissue.kinetic_energy();
+            let dt = fraction * tissue.explicit_dt_limit();
+            let mut peak = 0.0f64;
+            for _ in 0..4000 {
+                tissue.step(Integrator::Symplectic, dt).unwrap();
+                peak = peak.max(tissue.kinetic_energy());
+            }
+            peak / start
+        };
+        let at = peak(crate::sim::MAX_EXPLICIT_FRACTION);
+        assert!(at <= 1.0 + 1e-9, "kinetic energy rose to {at} x the start's");
+        let above = peak(1.1);
+        assert!(above.is_nan() || above >= 1e3, "10 % above the limit: {above} x the start's");
     }
 
     #[test]

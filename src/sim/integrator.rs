@@ -60,12 +60,14 @@ pub fn check_dt(dt: f64) -> Result<(), String> {
     }
 }
 
-/// The automatic choice runs symplectic Euler up to this fraction of the tissue's stability
-/// limit: a margin under the limit from the rest stiffness's stiffest mode (a Lanczos upper
-/// estimate, capped by a rigorous bound), for springs stretched by a drag, which stiffen across
-/// (0.8 of the step leaves room for `omega_max^2` 1.56 times the rest one).
+/// The automatic choice runs symplectic Euler up to this fraction of a deforming tissue's
+/// stability limit: a margin under the limit from the rest stiffness's stiffest mode (a Lanczos
+/// upper estimate, capped by a rigorous bound), for springs stretched by a drag, which stiffen
+/// across (0.8 of the step leaves room for `omega_max^2` 1.56 times the rest one).
 pub const AUTO_EXPLICIT_FRACTION: f64 = 0.8;
-/// Symplectic Euler, asked for by name, is accepted up to this fraction of its limit.
+/// Symplectic Euler, asked for by name, is accepted up to this fraction of its limit; the
+/// automatic choice goes as far on a tissue whose stiffness does not change as it deforms (the
+/// linear FEM: its rest limit is its limit in every state, so no room for stiffening is needed).
 pub const MAX_EXPLICIT_FRACTION: f64 = 0.9;
 
 /// The explicit stability limit a step must respect, s: the tissue's (symplectic Euler on its
@@ -75,14 +77,28 @@ pub const MAX_EXPLICIT_FRACTION: f64 = 0.9;
 /// acts on positions or through the material's surface compliance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepLimit {
-    /// The tissue's explicit limit, s.
+    /// The tissue's explicit limit at rest, s.
     pub tissue: f64,
+    /// Whether the tissue's stiffness is the same in every state (the linear FEM), so that its
+    /// rest limit holds however it deforms.
+    pub constant_stiffness: bool,
 }
 
 impl StepLimit {
-    /// The tissue's limit.
+    /// The limit of a tissue that may stiffen as it deforms (a lattice, the corotational FEM).
     pub fn tissue(tissue: f64) -> Self {
-        Self { tissue }
+        Self { tissue, constant_stiffness: false }
+    }
+
+    /// The limit of a tissue whose stiffness does not change (the linear FEM).
+    pub fn constant_stiffness(tissue: f64) -> Self {
+        Self { tissue, constant_stiffness: true }
+    }
+
+    /// The fraction of the limit the automatic choice runs symplectic Euler up to:
+    /// [`MAX_EXPLICIT_FRACTION`] for a constant stiffness, [`AUTO_EXPLICIT_FRACTION`] otherwise.
+    pub fn auto_fraction(self) -> f64 {
+        if self.constant_stiffness { MAX_EXPLICIT_FRACTION } else { AUTO_EXPLICIT_FRACTION }
     }
 
     /// The limit of `integrator`: the tissue's for symplectic Euler, none for the implicit schemes.
@@ -94,9 +110,9 @@ impl StepLimit {
     }
 
     /// Whether the automatic choice may run `integrator` at `h`: symplectic Euler within
-    /// [`AUTO_EXPLICIT_FRACTION`] of the tissue's limit, an implicit scheme at any step.
+    /// [`StepLimit::auto_fraction`] of the tissue's limit, an implicit scheme at any step.
     pub fn auto_allows(self, integrator: Integrator, h: f64) -> bool {
-        h <= AUTO_EXPLICIT_FRACTION * self.of(integrator)
+        h <= self.auto_fraction() * self.of(integrator)
     }
 
     /// Why `integrator` at `dt` is refused, if it is: symplectic Euler above
@@ -283,5 +299,22 @@ mod tests {
             assert!(choose_step(Some(named), 1e-3, limit, damping, DEFAULT_DYNAMIC_BUDGET).is_ok(), "{named:?}");
         }
         assert_eq!(limit.of(Integrator::Symplectic), 6e-4);
+    }
+
+    /// A tissue whose stiffness does not change (the linear FEM) needs no room for stiffening:
+    /// the automatic choice goes up to [`MAX_EXPLICIT_FRACTION`] of its limit, where a deforming
+    /// one stops at [`AUTO_EXPLICIT_FRACTION`] (the linear FEM at 24^3: 5 substeps, not 6).
+    #[test]
+    fn a_constant_stiffness_runs_to_the_named_fraction() {
+        let damping = Damping::Ratio { zeta: 0.2, omega_1: 90.0 };
+        let substeps = |limit: StepLimit| {
+            fewest_substeps(Integrator::Symplectic, 1e-3, limit, damping, DEFAULT_DYNAMIC_BUDGET).expect("stable")
+        };
+        // 0.2 ms is 0.83 of a 0.242 ms limit.
+        assert_eq!(substeps(StepLimit::tissue(2.42e-4)), 6);
+        assert_eq!(substeps(StepLimit::constant_stiffness(2.42e-4)), 5);
+        let fixed = StepLimit::constant_stiffness(2.42e-4);
+        assert!(fixed.auto_allows(Integrator::Symplectic, MAX_EXPLICIT_FRACTION * 2.42e-4));
+        assert!(fixed.refusal(Integrator::Symplectic, MAX_EXPLICIT_FRACTION * 2.42e-4).is_none());
     }
 }

@@ -148,7 +148,7 @@ impl Simulation {
 
     /// The limit the step policy respects: the tissue's (the tools do not bound the step).
     pub fn limit(&self) -> StepLimit {
-        StepLimit::tissue(self.dt_limit())
+        self.tissue.step_limit()
     }
 
     /// Sets the integrator and step by [`choose_step`] (the automatic choice meets the viewer's
@@ -761,11 +761,7 @@ mod tests {
         assert!(sim.try_set_integrator(Some(Integrator::Prefactored), 1e-3).is_ok());
         sim.set_integrator(None, 1e-3);
         assert_eq!(sim.integrator, Integrator::Symplectic);
-        assert!(
-            sim.dt <= crate::sim::AUTO_EXPLICIT_FRACTION * sim.dt_limit() && sim.dt > 0.5 * sim.dt_limit(),
-            "{}",
-            sim.dt
-        );
+        assert!(sim.dt <= sim.limit().auto_fraction() * sim.dt_limit() && sim.dt > 0.5 * sim.dt_limit(), "{}", sim.dt);
 
         let grid = crate::mechanics::grid::Grid::new(16).expect("grid");
         let tissue = Model::Lattice(crate::mechanics::msm::Topology::Hex).build_on(grid, &material, None, 0.2);

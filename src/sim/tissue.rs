@@ -60,6 +60,11 @@ pub trait Tissue: Send + std::fmt::Debug {
     fn kinetic_energy(&self) -> f64;
     /// The critical time step of the explicit integrator (an estimate on the safe side), s.
     fn explicit_dt_limit(&self) -> f64;
+    /// The limit the step policy respects: [`Tissue::explicit_dt_limit`] of a tissue that may
+    /// stiffen as it deforms, unless the tissue says its stiffness is constant.
+    fn step_limit(&self) -> super::integrator::StepLimit {
+        super::integrator::StepLimit::tissue(self.explicit_dt_limit())
+    }
     /// Fixes and loads nodes as `case` says (the state is kept).
     fn apply_case(&mut self, case: &LoadCase);
     /// The running mass-spring parameters, if the model has them.

@@ -145,7 +145,7 @@ pub fn cpu_f32_drift(model: Model, grid: Grid) -> anyhow::Result<f64> {
     let run = |single: bool| -> anyhow::Result<Box<dyn Tissue>> {
         let mut t = tissue(model, grid)?;
         t.set_single_precision(single).map_err(anyhow::Error::msg)?;
-        let limit = crate::sim::StepLimit::tissue(t.explicit_dt_limit());
+        let limit = t.step_limit();
         let substeps =
             crate::sim::fewest_substeps(Integrator::Symplectic, TICK_S, limit, t.damping(), DEFAULT_DYNAMIC_BUDGET)
                 .ok_or_else(|| anyhow::anyhow!("no substep count is stable"))?;
@@ -163,7 +163,7 @@ fn scale(gpu: &ComputeDevice, model: Model, grid: Grid, surface: &MaterialSurfac
     let built = || tissue(model, grid).map_err(|e| format!("{e:#}"));
     let mut cpu = built()?;
     let mut on_gpu = GpuTissue::new(gpu, built()?).map_err(|e| e.to_string())?;
-    let limit = crate::sim::StepLimit::tissue(cpu.explicit_dt_limit());
+    let limit = cpu.step_limit();
     let substeps =
         crate::sim::fewest_substeps(Integrator::Symplectic, TICK_S, limit, cpu.damping(), DEFAULT_DYNAMIC_BUDGET)
             .ok_or_else(|| format!("no substep count up to {} is stable", crate::sim::MAX_AUTO_SUBSTEPS))?;

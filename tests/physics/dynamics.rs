@@ -7,7 +7,7 @@ use tissue_sim::mechanics::grid::Grid;
 use tissue_sim::mechanics::material::Material;
 use tissue_sim::mechanics::msm::Topology;
 use tissue_sim::response::single_mode::{self, Scheme};
-use tissue_sim::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, StepLimit, choose_step};
+use tissue_sim::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, choose_step};
 use tissue_sim::validate::dynamic_measure::{Configuration, References, measure, modal_model};
 use tissue_sim::validate::dynamic_reference::{self, Transient, view_scene};
 
@@ -112,14 +112,8 @@ fn the_viewer_default_meets_its_dynamic_targets_and_the_automatic_step_follows_t
     // The viewer's default: the hex tissue of object A, the automatic choice at 0.1 ms.
     let material = Material::object_a();
     let tissue = Model::Lattice(Topology::Hex).build(&material, None, ZETA).expect("build");
-    let (integrator, dt, _) = choose_step(
-        None,
-        1e-4,
-        StepLimit::tissue(tissue.explicit_dt_limit()),
-        tissue.damping(),
-        DEFAULT_DYNAMIC_BUDGET,
-    )
-    .expect("auto");
+    let (integrator, dt, _) =
+        choose_step(None, 1e-4, tissue.step_limit(), tissue.damping(), DEFAULT_DYNAMIC_BUDGET).expect("auto");
     let refs = References::new(&material, ZETA).expect("reference");
     let r = measure(&refs, Configuration { model: Model::Lattice(Topology::Hex), params: None, integrator, dt })
         .expect("measure");
@@ -141,9 +135,7 @@ fn the_viewer_default_meets_its_dynamic_targets_and_the_automatic_step_follows_t
     // The FEM asked for 1 ms steps: backward Euler there damps 4 % of critical too much, so the
     // automatic choice takes substeps, and its prediction meets the budget.
     let fem = Model::Fem(Formulation::Corotational).build(&material, None, ZETA).expect("fem");
-    let (i, h, note) =
-        choose_step(None, 1e-3, StepLimit::tissue(fem.explicit_dt_limit()), fem.damping(), DEFAULT_DYNAMIC_BUDGET)
-            .expect("auto");
+    let (i, h, note) = choose_step(None, 1e-3, fem.step_limit(), fem.damping(), DEFAULT_DYNAMIC_BUDGET).expect("auto");
     assert!(h < 1e-3 && note.is_some(), "{i:?} {h} {note:?}");
     let (p, d) = tissue_sim::sim::predicted_error(i, h, fem.damping()).expect("stable");
     assert!(p <= DEFAULT_DYNAMIC_BUDGET.period && d <= DEFAULT_DYNAMIC_BUDGET.damping);
