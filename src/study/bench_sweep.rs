@@ -64,6 +64,9 @@ pub struct Sweep {
     /// The largest resolution swept at which each model's automatic choice on the CPU ticks in
     /// under 1 ms (runs at 1 kHz), by model (`None`: not even 8^3).
     pub largest_1khz_nodes: BTreeMap<String, Option<usize>>,
+    /// The same with the force in `f32` ([`Compute::CpuF32`]: symplectic Euler at the automatic
+    /// choice's substeps), by model (`None`: not even 8^3, or no `f32` step).
+    pub largest_1khz_nodes_cpu_f32: BTreeMap<String, Option<usize>>,
     /// The GPU's step alone and its 1 ms tick at scale against the CPU's
     /// ([`super::bench_gpu`]).
     #[serde(flatten)]
@@ -162,20 +165,26 @@ pub fn run() -> anyhow::Result<Sweep> {
             }
         }
     }
-    let mut largest_1khz_nodes = BTreeMap::new();
-    for model in Model::ALL {
-        let fast = ticks
+    let largest = |counted: &dyn Fn(&SweepTick) -> bool| -> BTreeMap<String, Option<usize>> {
+        Model::ALL
             .iter()
-            .filter(|t| t.model == model.name() && t.automatic && t.tick_s.is_some_and(|s| s < TICK_S))
-            .map(|t| t.nodes)
-            .max();
-        largest_1khz_nodes.insert(model.name(), fast);
-    }
+            .map(|model| {
+                let fast = ticks
+                    .iter()
+                    .filter(|t| t.model == model.name() && counted(t) && t.tick_s.is_some_and(|s| s < TICK_S))
+                    .map(|t| t.nodes)
+                    .max();
+                (model.name(), fast)
+            })
+            .collect()
+    };
+    let largest_1khz_nodes = largest(&|t| t.automatic);
+    let largest_1khz_nodes_cpu_f32 = largest(&|t| t.compute == Compute::CpuF32.name());
     let gpu = match &gpu {
         Ok(g) => super::bench_gpu::measure(g, &surface)?,
         Err(e) => super::bench_gpu::unavailable(e),
     };
-    Ok(Sweep { ticks, largest_1khz_nodes, gpu })
+    Ok(Sweep { ticks, largest_1khz_nodes, largest_1khz_nodes_cpu_f32, gpu })
 }
 
 impl Sweep {
@@ -207,7 +216,9 @@ impl Sweep {
         }
         s += "largest resolution at 1 kHz (automatic choice, CPU):\n";
         for (m, n) in &self.largest_1khz_nodes {
-            s += &format!("  {m:<17} {}\n", n.map_or("below 8^3".into(), |n| format!("{n}^3")));
+            let f32 = self.largest_1khz_nodes_cpu_f32.get(m).copied().flatten();
+            let f32 = f32.map_or("none".into(), |n| format!("{n}^3"));
+            s += &format!("  {m:<17} {} (cpu-f32: {f32})\n", n.map_or("below 8^3".into(), |n| format!("{n}^3")));
         }
         s + &self.gpu.to_text()
     }
