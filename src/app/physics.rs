@@ -91,8 +91,9 @@ pub struct Published {
     pub note: Option<String>,
     /// Integrator and dt in use.
     pub integrator: Option<(Integrator, f64)>,
-    /// The explicit stability limit of the running model, s.
-    pub dt_limit: f64,
+    /// The step limit of the running model: its explicit stability limit, s, and whether its
+    /// stiffness is constant ([`crate::sim::Simulation::limit`], what the step policy respects).
+    pub limit: crate::sim::StepLimit,
     /// How the running model is damped.
     pub damping: Option<crate::response::damping::Damping>,
     /// The running model's parameters.
@@ -187,7 +188,7 @@ impl PhysicsThread {
                 into.note.clone_from(&p.note);
             }
             into.integrator = p.integrator;
-            into.dt_limit = p.dt_limit;
+            into.limit = p.limit;
             into.damping = p.damping;
             into.params = p.params;
             into.moving = p.moving;
@@ -352,7 +353,7 @@ fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop,
             p.revision += 1;
         }
         p.integrator = Some((sim.integrator, sim.dt));
-        p.dt_limit = sim.dt_limit();
+        p.limit = sim.limit();
         p.damping = Some(sim.tissue.damping());
         p.params = sim.tissue.params();
         p.moving = !state.paused && (sim.tool != Tool::None || sim.tissue.kinetic_energy() > 1e-12);

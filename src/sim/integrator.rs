@@ -75,7 +75,7 @@ pub const MAX_EXPLICIT_FRACTION: f64 = 0.9;
 /// symplectic Euler, backward Euler on its node ([`crate::sim::drag_velocity_change`]), and
 /// inside the implicit schemes' solves ([`crate::mechanics::anchor`]); the probe's contact
 /// acts on positions or through the material's surface compliance.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct StepLimit {
     /// The tissue's explicit limit at rest, s.
     pub tissue: f64,

@@ -64,8 +64,8 @@ pub struct Sweep {
     /// The largest resolution swept at which each model's automatic choice on the CPU ticks in
     /// under 1 ms (runs at 1 kHz), by model (`None`: not even 8^3).
     pub largest_1khz_nodes: BTreeMap<String, Option<usize>>,
-    /// The same with the force in `f32` ([`Compute::CpuF32`]: symplectic Euler at the automatic
-    /// choice's substeps), by model (`None`: not even 8^3, or no `f32` step).
+    /// The same for the force in `f32` ([`Compute::CpuF32`]: symplectic Euler at its fewest
+    /// substeps inside the dynamic budget), by model (`None`: not even 8^3, or no `f32` step).
     pub largest_1khz_nodes_cpu_f32: BTreeMap<String, Option<usize>>,
     /// The GPU's step alone and its 1 ms tick at scale against the CPU's
     /// ([`super::bench_gpu`]).
@@ -214,10 +214,10 @@ impl Sweep {
                 drift = t.f32_drift.map_or(String::new(), |d| format!(" (f32 drift after 20 ticks {d:.1e})"))
             );
         }
-        s += "largest resolution at 1 kHz (automatic choice, CPU):\n";
+        s += "largest resolution at 1 kHz (automatic choice, CPU; cpu-f32: -, none or no f32 step):\n";
         for (m, n) in &self.largest_1khz_nodes {
             let f32 = self.largest_1khz_nodes_cpu_f32.get(m).copied().flatten();
-            let f32 = f32.map_or("none".into(), |n| format!("{n}^3"));
+            let f32 = f32.map_or("-".into(), |n| format!("{n}^3"));
             s += &format!("  {m:<17} {} (cpu-f32: {f32})\n", n.map_or("below 8^3".into(), |n| format!("{n}^3")));
         }
         s + &self.gpu.to_text()

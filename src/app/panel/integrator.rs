@@ -105,7 +105,7 @@ pub fn show(ui: &mut egui::Ui, shown: &Shown, published: &Published, requests: &
         dt = dt_ms * 1e-3;
         ask = Some(ask.unwrap_or(Some(running)));
     }
-    ui.label(format!("explicit stability limit ~ {:.3} ms", published.dt_limit * 1e3));
+    ui.label(format!("explicit stability limit ~ {:.3} ms", published.limit.tissue * 1e3));
     if ui
         .button("auto (meets the dynamic budget)")
         .on_hover_text(

@@ -379,11 +379,10 @@ mod tests {
         let p = wait_until(&physics, |p| p.params == Some(axis));
         assert_eq!(p.params.map(|p| p.topology()), Some(Topology::Axis), "the running model agrees");
         // The automatic choice follows the new model's limit.
-        let auto = crate::sim::choose_integrator(None, state.shown.dt, crate::sim::StepLimit::tissue(p.dt_limit))
-            .expect("auto never refuses");
+        let auto = crate::sim::choose_integrator(None, state.shown.dt, p.limit).expect("auto never refuses");
         assert_eq!(p.integrator.map(|(i, _)| i), Some(auto));
         // Symplectic Euler asked for far above its limit: the policy on the physics side refuses.
-        let limit = p.dt_limit;
+        let limit = p.limit.tissue;
         assert!(limit > 0.0 && limit.is_finite());
         state.handle(Request::SetIntegrator(Some(Integrator::Symplectic), 3.0 * limit), &mut send);
         // It switches to the automatic choice: symplectic substeps, cheaper than one prefactored step.
