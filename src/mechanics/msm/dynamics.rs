@@ -506,9 +506,7 @@ fn symplectic_step_generic(model: &MsmModel, s: &mut Dynamics, dt: f64) {
             let (x, v, f, fe) = (&mut s.x[c][..n], &mut s.v[c][..n], &springs[c][..n], &s.f_ext[c][..n]);
             let (free, inv_mass, damping) = (&s.free[..n], &s.inv_mass[..n], &model.damping[..n]);
             for p in 0..n {
-                let vn = (v[p] + dt * inv_mass[p] * (f64::from(f[p]) + fe[p] - damping[p] * v[p])) * free[p];
-                v[p] = vn;
-                x[p] += dt * vn;
+                advance(&mut x[p], &mut v[p], f64::from(f[p]) + fe[p], inv_mass[p], damping[p], free[p], dt);
             }
         }
         return;
@@ -522,11 +520,18 @@ fn symplectic_step_generic(model: &MsmModel, s: &mut Dynamics, dt: f64) {
         for ((((((x, v), f), fe), free), inv_m), d) in
             x.iter_mut().zip(v.iter_mut()).zip(f.iter()).zip(fe).zip(&s.free).zip(&s.inv_mass).zip(&model.damping)
         {
-            let vn = (*v + dt * inv_m * (f + fe - d * *v)) * free;
-            *v = vn;
-            *x += dt * vn;
+            advance(x, v, f + fe, *inv_m, *d, *free, dt);
         }
     }
+}
+
+/// A node component's symplectic Euler update under the total load `force` (springs plus
+/// external): `v = (v + dt / m (force - c v)) free`, `x += dt v`.
+#[inline(always)]
+fn advance(x: &mut f64, v: &mut f64, force: f64, inv_mass: f64, damping: f64, free: f64, dt: f64) {
+    let vn = (*v + dt * inv_mass * (force - damping * *v)) * free;
+    *v = vn;
+    *x += dt * vn;
 }
 
 fn symplectic_step(model: &MsmModel, s: &mut Dynamics, dt: f64) {
