@@ -44,6 +44,16 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// The allocations in 100 symplectic steps with the springs' force in `f32` (`cpu-f32`).
+fn single_precision_steps(model: &MsmModel, dynamics: &mut Dynamics) -> usize {
+    dynamics.set_single_precision(model, true);
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    for _ in 0..100 {
+        dynamics.step_symplectic(model, 1e-5);
+    }
+    ALLOCATIONS.load(Ordering::Relaxed) - before
+}
+
 #[test]
 fn explicit_and_implicit_steps_do_not_allocate() {
     let grid = Grid::paper();
@@ -77,6 +87,7 @@ fn explicit_and_implicit_steps_do_not_allocate() {
         (0, 0, 0),
         "allocations in 100 explicit / 10 implicit / 10 prefactored steps"
     );
+    assert_eq!(single_precision_steps(&model, &mut dynamics), 0, "allocations in 100 f32 symplectic steps");
     // The interactive simulation over the Tissue trait, with each tool and the guard's good-state
     // copies: allocation-free too. (In the same test: the counter is global to the binary.)
     use tissue_sim::sim::{Integrator, Simulation, Tool};

@@ -6,7 +6,8 @@
 //! ([`crate::mechanics::anchor`]). No step allocates once the state is built.
 
 use super::forces::{
-    ForceScratch, TangentAssembler, accumulate_spring_forces, add_spring_forces, dispatch_avx2, tangent_product,
+    ForceScratch, TangentAssembler, accumulate_spring_forces, add_spring_forces, dispatch_avx2, dispatch_simd,
+    tangent_product,
 };
 use super::model::MsmModel;
 use super::reduction::DofMap;
@@ -496,21 +497,24 @@ impl Dynamics {
     }
 }
 
+/// The symplectic step with the springs' force in `f32` ([`SingleForce`]).
+#[inline(always)]
+fn symplectic_single<const FMA: bool>(model: &MsmModel, s: &mut Dynamics, dt: f64) {
+    let Some(single) = &mut s.single else { return };
+    let springs = single.compute::<FMA>(&s.x);
+    let n = s.free.len();
+    for c in 0..3 {
+        // Every slice cut to `n`: no bounds checks, so the loop vectorises.
+        let (x, v, f, fe) = (&mut s.x[c][..n], &mut s.v[c][..n], &springs[c][..n], &s.f_ext[c][..n]);
+        let (free, inv_mass, damping) = (&s.free[..n], &s.inv_mass[..n], &model.damping[..n]);
+        for p in 0..n {
+            advance(&mut x[p], &mut v[p], f64::from(f[p]) + fe[p], inv_mass[p], damping[p], free[p], dt);
+        }
+    }
+}
+
 #[inline(always)]
 fn symplectic_step_generic(model: &MsmModel, s: &mut Dynamics, dt: f64) {
-    if let Some(single) = &mut s.single {
-        let springs = single.forces(&s.x);
-        let n = s.free.len();
-        for c in 0..3 {
-            // Every slice cut to `n`: no bounds checks, so the loop vectorises.
-            let (x, v, f, fe) = (&mut s.x[c][..n], &mut s.v[c][..n], &springs[c][..n], &s.f_ext[c][..n]);
-            let (free, inv_mass, damping) = (&s.free[..n], &s.inv_mass[..n], &model.damping[..n]);
-            for p in 0..n {
-                advance(&mut x[p], &mut v[p], f64::from(f[p]) + fe[p], inv_mass[p], damping[p], free[p], dt);
-            }
-        }
-        return;
-    }
     for f in &mut s.f {
         f.fill(0.0);
     }
@@ -535,5 +539,9 @@ fn advance(x: &mut f64, v: &mut f64, force: f64, inv_mass: f64, damping: f64, fr
 }
 
 fn symplectic_step(model: &MsmModel, s: &mut Dynamics, dt: f64) {
-    dispatch_avx2!(symplectic_step_generic, symplectic_step_avx2, (model: &MsmModel, s: &mut Dynamics, dt: f64));
+    if s.single.is_some() {
+        dispatch_simd!(symplectic_single, (model: &MsmModel, s: &mut Dynamics, dt: f64));
+    } else {
+        dispatch_avx2!(symplectic_step_generic, symplectic_step_avx2, (model: &MsmModel, s: &mut Dynamics, dt: f64));
+    }
 }

@@ -55,6 +55,40 @@ macro_rules! dispatch_avx2 {
 }
 pub(crate) use dispatch_avx2;
 
+/// Calls `$generic::<true>` through a copy compiled with AVX-512 (and AVX2 and FMA) or with AVX2
+/// and FMA, the widest the CPU has, else `$generic::<false>` (the const parameter: whether
+/// multiply-adds may be fused). For the `f32` steps, whose bits may differ between the paths.
+macro_rules! dispatch_simd {
+    ($generic:ident, ($($arg:ident : $ty:ty),*)) => {
+        #[cfg(target_arch = "x86_64")]
+        {
+            #[target_feature(enable = "avx512f,avx2,fma")]
+            unsafe fn avx512($($arg: $ty),*) {
+                $generic::<true>($($arg),*)
+            }
+            #[target_feature(enable = "avx2,fma")]
+            unsafe fn avx2($($arg: $ty),*) {
+                $generic::<true>($($arg),*)
+            }
+            if std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                // SAFETY: the CPU supports AVX-512F, AVX2 and FMA, checked just above.
+                unsafe { avx512($($arg),*) };
+                return;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+                // SAFETY: the CPU supports AVX2 and FMA, checked just above.
+                unsafe { avx2($($arg),*) };
+                return;
+            }
+        }
+        $generic::<false>($($arg),*);
+    };
+}
+pub(crate) use dispatch_simd;
+
 /// Adds every spring's force at positions `x` to `f` (x, y, z arrays), family by family: the
 /// family's pair forces into `scratch`, then `f[q] += t[s + q] - t[q]`. The same sums in the same
 /// order as with a buffer per family. `FAST`: the explicit step's pair loop ([`pair_loop`]), else
