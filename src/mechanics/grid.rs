@@ -24,7 +24,8 @@ pub enum GridError {
 }
 
 /// Largest supported number of nodes per axis: the GPU's explicit step runs at 64^3. (The FEM's
-/// sparse Cholesky needs about 1.5 GB at 32^3 and grows like n^6: solves refuse a factor over
+/// sparse Cholesky, in the grid's nested dissection, needs about 1.2 GB at 32^3 and grows like
+/// n^4 (the factor's nonzeros): solves refuse a factor over
 /// [`crate::mechanics::sparse::MAX_FACTOR_BYTES`] after its symbolic analysis, before the
 /// numeric factorisation; some solvers have their own smaller grid limits.)
 pub const MAX_NODES_PER_AXIS: usize = 64;
@@ -146,6 +147,29 @@ impl Grid {
     #[inline]
     pub fn ijk(&self, node: usize) -> [usize; 3] {
         [node % self.n, (node / self.n) % self.n, node / (self.n * self.n)]
+    }
+
+    /// The `(i, j, k)` of each dof's node, three dofs a node ([`SpdSystem::on_grid`] for a full
+    /// system).
+    ///
+    /// [`SpdSystem::on_grid`]: crate::mechanics::sparse::SpdSystem::on_grid
+    pub fn dof_nodes(&self) -> Vec<[u32; 3]> {
+        (0..3 * self.num_nodes()).map(|d| self.ijk(d / 3).map(|i| i as u32)).collect()
+    }
+
+    /// The `(i, j, k)` of each of `n` reduced unknowns, `unknown_of[d]` the unknown of node dof
+    /// `d` (`u32::MAX`: none); an unknown that several dofs share (a mirrored system) takes the
+    /// first one's node.
+    pub fn unknown_nodes(&self, unknown_of: impl Iterator<Item = u32>, n: usize) -> Vec<[u32; 3]> {
+        let mut nodes = vec![[u32::MAX; 3]; n];
+        for (d, u) in unknown_of.enumerate() {
+            if let Some(node) = nodes.get_mut(u as usize)
+                && node[0] == u32::MAX
+            {
+                *node = self.ijk(d / 3).map(|i| i as u32);
+            }
+        }
+        nodes
     }
 
     /// Whether a node lies on the cube's boundary.

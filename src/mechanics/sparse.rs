@@ -8,6 +8,7 @@
 //! Newton and implicit solvers refactor every step.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
@@ -68,6 +69,28 @@ impl SpdSystem {
     /// one) and returns the system with, for each entry, the slot its value goes to. The
     /// elimination order is faer's approximate minimum degree.
     pub fn new(n: usize, entries: &[(usize, usize)]) -> Result<(Self, Vec<u32>), SparseError> {
+        Self::ordered(n, entries, None)
+    }
+
+    /// [`SpdSystem::new`] for unknowns on the nodes of a grid, `node_of[u]` the `(i, j, k)` of
+    /// unknown `u`'s node (couplings only between nodes at most one apart along each axis), in
+    /// the grid's nested dissection ([`nested_dissection`]). On the cube's full systems the
+    /// factor is 1.8 (FEM, 27 neighbours) to 3.2 (shear lattice, 19) times smaller than with
+    /// approximate minimum degree at 32^3: 1.2 GB where it was 2.2 and 3.8 GB.
+    pub fn on_grid(
+        n: usize,
+        entries: &[(usize, usize)],
+        node_of: &[[u32; 3]],
+    ) -> Result<(Self, Vec<u32>), SparseError> {
+        if node_of.len() != n {
+            return Err(SparseError::Pattern(format!("{} node positions for {n} unknowns", node_of.len())));
+        }
+        Self::ordered(n, entries, Some(&nested_dissection(node_of)))
+    }
+
+    /// [`SpdSystem::new`] eliminating in the order `order` (`order[k]`: the unknown eliminated
+    /// `k`-th), else in approximate minimum degree.
+    fn ordered(n: usize, entries: &[(usize, usize)], order: Option<&[u32]>) -> Result<(Self, Vec<u32>), SparseError> {
         // Lower-triangle (row, col) of every entry, then every diagonal (so a shift always fits).
         let mut lower = Vec::with_capacity(entries.len() + n);
         for &(r, c) in entries {
@@ -111,9 +134,30 @@ impl SpdSystem {
         let pattern = SymbolicSparseColMat::<u32>::new_checked(n, n, col_ptr, None, row_idx);
         slot_of.truncate(entries.len());
         let slots = slot_of;
-        let symbolic =
-            factorize_symbolic_cholesky(pattern.as_ref(), Side::Lower, SymmetricOrdering::Amd, Default::default())
-                .map_err(|e| SparseError::Pattern(format!("{e:?}")))?;
+        let mut inverse = Vec::new();
+        let ordering = match order {
+            Some(forward) => {
+                // Each unknown exactly once, else no permutation (faer would panic).
+                inverse = vec![u32::MAX; n];
+                for (k, &u) in forward.iter().enumerate() {
+                    match inverse.get_mut(u as usize) {
+                        Some(slot) if *slot == u32::MAX => *slot = k as u32,
+                        _ => return Err(SparseError::Pattern(format!("elimination order repeats or exceeds {u}"))),
+                    }
+                }
+                if forward.len() != n {
+                    return Err(SparseError::Pattern(format!(
+                        "elimination order of {} for {n} unknowns",
+                        forward.len()
+                    )));
+                }
+                SymmetricOrdering::Custom(PermRef::new_checked(forward, &inverse, n))
+            }
+            None => SymmetricOrdering::Amd,
+        };
+        let symbolic = factorize_symbolic_cholesky(pattern.as_ref(), Side::Lower, ordering, Default::default())
+            .map_err(|e| SparseError::Pattern(format!("{e:?}")))?;
+        drop(inverse);
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
@@ -293,6 +337,58 @@ impl SpdSystem {
     }
 }
 
+/// A set of nodes this small, or this thin along every axis, is eliminated as it comes.
+const DISSECTION_LEAF: usize = 64;
+
+/// The nested dissection of unknowns on grid nodes (`node_of[u]`, as in [`SpdSystem::on_grid`]):
+/// the set's longest axis is cut by the plane of nodes at its middle coordinate, which
+/// separates the two sides (no coupling reaches two nodes apart); each side is ordered the same
+/// way, then the plane last. Returns the unknowns in elimination order.
+pub fn nested_dissection(node_of: &[[u32; 3]]) -> Vec<u32> {
+    let mut order = Vec::with_capacity(node_of.len());
+    // Sets still to order, each with its separator to append after it (taken last in, first
+    // out: the left side, the right side, then the plane).
+    enum Task {
+        Split(Vec<u32>),
+        Emit(Vec<u32>),
+    }
+    let mut stack = vec![Task::Split((0..node_of.len() as u32).collect())];
+    while let Some(task) = stack.pop() {
+        let set = match task {
+            Task::Emit(set) => {
+                order.extend(set);
+                continue;
+            }
+            Task::Split(set) => set,
+        };
+        let (mut lo, mut hi) = ([u32::MAX; 3], [0u32; 3]);
+        for &u in &set {
+            for a in 0..3 {
+                lo[a] = lo[a].min(node_of[u as usize][a]);
+                hi[a] = hi[a].max(node_of[u as usize][a]);
+            }
+        }
+        let axis = (0..3).max_by_key(|&a| hi[a].saturating_sub(lo[a])).unwrap_or(0);
+        if set.len() <= DISSECTION_LEAF || hi[axis].saturating_sub(lo[axis]) < 2 {
+            order.extend(set);
+            continue;
+        }
+        let middle = lo[axis] + (hi[axis] - lo[axis]) / 2;
+        let (mut left, mut right, mut plane) = (Vec::new(), Vec::new(), Vec::new());
+        for u in set {
+            match node_of[u as usize][axis].cmp(&middle) {
+                std::cmp::Ordering::Less => left.push(u),
+                std::cmp::Ordering::Greater => right.push(u),
+                std::cmp::Ordering::Equal => plane.push(u),
+            }
+        }
+        stack.push(Task::Emit(plane));
+        stack.push(Task::Split(right));
+        stack.push(Task::Split(left));
+    }
+    order
+}
+
 /// The largest grid each direct solve accepts, nodes per axis, at the memory its factor needs
 /// (the sparse factor bound, [`MAX_FACTOR_BYTES`]); checked before any work
 /// ([`DirectSolve::check_grid`]): the FEM patch cases and the touch benchmark (full, unreduced
@@ -369,6 +465,66 @@ mod tests {
         for i in 0..n {
             assert!((b[i] - x[i]).abs() < 1e-13);
         }
+    }
+
+    /// A 27-neighbour pattern on `n^3` nodes, three unknowns a node, and an SPD matrix on it
+    /// (a graph Laplacian per component plus a shift, with a small coupling of the components).
+    fn grid_system(n: usize) -> (Vec<(usize, usize)>, Vec<f64>) {
+        let grid = crate::mechanics::grid::Grid::new(n).unwrap();
+        let (mut entries, mut values) = (Vec::new(), Vec::new());
+        for p in 0..grid.num_nodes() {
+            let [i, j, k] = grid.ijk(p);
+            for q in 0..grid.num_nodes() {
+                let [a, b, c] = grid.ijk(q);
+                if q >= p || i.abs_diff(a) > 1 || j.abs_diff(b) > 1 || k.abs_diff(c) > 1 {
+                    continue;
+                }
+                for (r, cc) in [(0, 0), (1, 1), (2, 2), (0, 1)] {
+                    entries.push((3 * p + r, 3 * q + cc));
+                    values.push(if r == cc { -1.0 } else { 0.01 });
+                }
+            }
+        }
+        (entries, values)
+    }
+
+    #[test]
+    fn nested_dissection_orders_every_unknown_once_and_solves_as_minimum_degree() {
+        let n = 9;
+        let grid = crate::mechanics::grid::Grid::new(n).unwrap();
+        let order = nested_dissection(&grid.dof_nodes());
+        let mut seen = vec![false; 3 * grid.num_nodes()];
+        for &u in &order {
+            assert!(!std::mem::replace(&mut seen[u as usize], true), "unknown {u} twice");
+        }
+        assert!(seen.iter().all(|&s| s));
+        let (entries, values) = grid_system(n);
+        let dofs = 3 * grid.num_nodes();
+        let x: Vec<f64> = (0..dofs).map(|i| (i as f64 * 0.37).sin()).collect();
+        let mut solved = Vec::new();
+        for dissected in [false, true] {
+            let (mut sys, slots) = if dissected {
+                SpdSystem::on_grid(dofs, &entries, &grid.dof_nodes()).unwrap()
+            } else {
+                SpdSystem::new(dofs, &entries).unwrap()
+            };
+            for (&slot, &v) in slots.iter().zip(&values) {
+                sys.add(slot, v);
+            }
+            // Diagonally dominant: 27 neighbours of -1 each at most.
+            sys.add_diagonal(30.0);
+            sys.factor().unwrap();
+            let mut b = vec![0.0; dofs];
+            sys.mul(&x, &mut b);
+            sys.solve_in_place(&mut b).unwrap();
+            solved.push((b, sys.factor_nonzeros()));
+        }
+        for (a, b) in solved[0].0.iter().zip(&solved[1].0) {
+            assert!((a - b).abs() < 1e-12, "{a} against {b}");
+        }
+        assert!(solved[1].1 < solved[0].1, "dissection fill {} against minimum degree {}", solved[1].1, solved[0].1);
+        let wrong = SpdSystem::on_grid(dofs, &entries, &grid.dof_nodes()[1..]);
+        assert!(matches!(wrong, Err(SparseError::Pattern(_))));
     }
 
     #[test]

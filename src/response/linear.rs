@@ -178,7 +178,7 @@ impl SceneSolver {
 
     /// The pattern of `k` with the dofs `fixed` held instead of the scene's clamp.
     pub fn with_fixed(grid: &Grid, k: &GroupedStiffness, fixed: Vec<bool>) -> Result<Self, SparseError> {
-        let (system, slots) = SpdSystem::new(3 * grid.num_nodes(), &k.entries)?;
+        let (system, slots) = SpdSystem::on_grid(3 * grid.num_nodes(), &k.entries, &grid.dof_nodes())?;
         Ok(Self { system, slots, fixed })
     }
 

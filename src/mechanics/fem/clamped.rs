@@ -129,7 +129,8 @@ impl ClampedSolver {
                 }
             }
         }
-        let (system, slot_ids) = SpdSystem::new(next as usize, &entries)?;
+        let nodes = grid.unknown_nodes(map.iter().map(|m| m.0), next as usize);
+        let (system, slot_ids) = SpdSystem::on_grid(next as usize, &entries, &nodes)?;
         // One (slot, factor) per representative element and lower local pair, to replay assembly.
         let mut it = slot_ids.into_iter().zip(factors);
         let slots = used.into_iter().map(|ok| if ok { it.next() } else { None }.unwrap_or((u32::MAX, 0.0))).collect();

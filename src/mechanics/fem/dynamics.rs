@@ -513,7 +513,7 @@ impl FemDynamics {
     fn prefactored_system(&self, dt: f64, trapezoidal: bool) -> Result<SpdSystem, SparseError> {
         let (c_scale, k_scale) = implicit_scales(dt, trapezoidal);
         let (entries, values) = self.model.stiffness_entries();
-        let (mut system, slots) = SpdSystem::new(self.x.len(), &entries)?;
+        let (mut system, slots) = SpdSystem::on_grid(self.x.len(), &entries, &self.model.grid.dof_nodes())?;
         for (slot, v) in slots.iter().zip(values) {
             system.add(*slot, k_scale * v);
         }

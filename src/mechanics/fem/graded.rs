@@ -188,7 +188,8 @@ impl GradedFem {
                 }
             }
         }
-        let (mut system, slots) = SpdSystem::new(n, &entries)?;
+        let nodes: Vec<[u32; 3]> = (0..n).map(|d| mesh.ijk(d / 3).map(|i| i as u32)).collect();
+        let (mut system, slots) = SpdSystem::on_grid(n, &entries, &nodes)?;
         drop(entries);
         for (&slot, &v) in slots.iter().zip(&values) {
             system.add(slot, v);

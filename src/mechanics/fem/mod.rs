@@ -176,7 +176,7 @@ impl StaticSolver {
     pub fn new(model: &FemModel) -> Result<Self, SparseError> {
         let (entries, values) = model.stiffness_entries();
         let dofs = 3 * model.grid.num_nodes();
-        let (mut system, slots) = SpdSystem::new(dofs, &entries)?;
+        let (mut system, slots) = SpdSystem::on_grid(dofs, &entries, &model.grid.dof_nodes())?;
         for (slot, v) in slots.iter().zip(values) {
             system.add(*slot, v);
         }

@@ -359,7 +359,8 @@ impl TangentAssembler {
                 }
             }
         }
-        let (system, entry_slots) = SpdSystem::new(dofs.n, &entries)?;
+        let nodes = model.grid.unknown_nodes(dofs.map.iter().map(|m| m.0), dofs.n);
+        let (system, entry_slots) = SpdSystem::on_grid(dofs.n, &entries, &nodes)?;
         let mut slots = vec![[(u32::MAX, 0.0); 21]; springs.len()];
         for ((s, local, factor), slot) in owners.into_iter().zip(entry_slots) {
             slots[s][local] = (slot, factor);
