@@ -79,8 +79,8 @@ fn compute(ui: &mut egui::Ui, settings: &mut ViewSettings, requests: &mut Vec<Re
              the corotational FEM stay on the CPU.",
         ),
         Compute::CpuF32 => ui.label(
-            "The symplectic step of the lattices and the linear FEM sums its force in f32 on the CPU (1.5 to 2x \
-             faster a tick at 24^3; after 20 ticks the nodes part from the f64 run by up to 2.2e-7 of the largest \
+            "The symplectic step of the lattices and the linear FEM sums its force in f32 on the CPU (1.5 to 2.6x \
+             faster a tick at 24^3; after 20 ticks the nodes part from the f64 run by up to 2.3e-7 of the largest \
              displacement on the lattices, 3.5e-5 on the FEM, at 8^3 to 32^3); the corotational FEM refuses it.",
         ),
         Compute::Cpu => return,
