@@ -337,7 +337,7 @@ impl SpdSystem {
     }
 }
 
-/// A set of nodes this small, or this thin along every axis, is eliminated as it comes.
+/// A set of this few unknowns, or one this thin along its longest axis, is eliminated as it comes.
 const DISSECTION_LEAF: usize = 64;
 
 /// The nested dissection of unknowns on grid nodes (`node_of[u]`, as in [`SpdSystem::on_grid`]):

@@ -164,7 +164,8 @@ pub fn compute(opts: &ChartOptions, progress: &mut dyn FnMut(&str)) -> anyhow::R
     if opts.resolutions.iter().any(|&n| n > MAX_COUPLED_IMPLICIT_N) {
         notes.push(format!(
             "implicit steps of the shear and hex lattices and of the FEM are measured up to {MAX_COUPLED_IMPLICIT_N}^3 only: \
-             their sparse factor grows like n^6 (several GB and minutes at 32^3 on this machine)"
+             their sparse factorisation's work grows like n^6 (about 1.2 GB and tens of seconds a factor at 32^3 on this \
+             machine)"
         ));
     }
     for object in &opts.objects {

@@ -21,8 +21,10 @@ use crate::study::timing::{time_fallible, time_per_call};
 /// Lanczos steps for the chart's `omega_max`, at most (the stability study allows more).
 const CHART_LANCZOS_ITERATIONS: usize = 300;
 /// Largest resolution at which the implicit step of a coupled model (shear or hex lattice, FEM)
-/// is measured: its sparse factor grows like `n^6` (several GB and minutes at 32^3 on this
-/// 2-core machine). The axis lattice's rest tangent splits into chains and is measured at any size.
+/// is measured: its sparse factorisation's work grows like `n^6` (about 1.2 GB and tens of seconds
+/// a factor at 32^3 in the grid's nested dissection, on this 2-core machine; the lattices'
+/// linearised backward Euler factorises every step). The axis lattice's rest tangent splits into
+/// chains and is measured at any size.
 pub const MAX_COUPLED_IMPLICIT_N: usize = 24;
 /// The length errors are expressed in (the paper's 8^3 spacing), metres.
 pub const ERROR_UNIT_M: f64 = CUBE_SIDE_M / 7.0;

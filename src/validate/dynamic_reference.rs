@@ -173,7 +173,7 @@ pub fn newmark(
     let n = case.load.len();
     let mass = model.dof_masses(&case.fixed);
     let free: Vec<f64> = case.fixed.iter().map(|&f| if f { 0.0 } else { 1.0 }).collect();
-    let (mut system, slots) = SpdSystem::new(n, &model.stiffness.entries)?;
+    let (mut system, slots) = SpdSystem::on_grid(n, &model.stiffness.entries, &model.grid.dof_nodes())?;
     for ((&slot, &u), &g) in slots.iter().zip(&model.stiffness.unit).zip(&model.stiffness.group) {
         system.add(slot, u * model.theta[g as usize]);
     }
