@@ -1,13 +1,6 @@
 // Overlays: springs, the fixed face, the tools, as coloured line segments.
 
-struct Globals {
-    view_proj: mat4x4<f32>,
-    light_dir: vec4<f32>,
-    mode: vec4<f32>,
-    base_colour: vec4<f32>,
-};
-
-@group(0) @binding(0) var<uniform> globals: Globals;
+// Globals: shaders/globals.wgsl, put in front of this file.
 
 struct VertexIn {
     @location(0) position: vec3<f32>,

@@ -1,16 +1,6 @@
 // The tissue cube's surface: Lambert + ambient shading, optional colour map of a per-vertex scalar.
 
-struct Globals {
-    view_proj: mat4x4<f32>,
-    // xyz: direction towards the light (world space).
-    light_dir: vec4<f32>,
-    // x: 1.0 = colour map on, y: opacity, z: 1.0 = encode to sRGB here (non-sRGB target), w: unused.
-    mode: vec4<f32>,
-    // Base colour when the colour map is off.
-    base_colour: vec4<f32>,
-};
-
-@group(0) @binding(0) var<uniform> globals: Globals;
+// Globals: shaders/globals.wgsl, put in front of this file.
 
 struct VertexIn {
     @location(0) position: vec3<f32>,

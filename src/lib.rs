@@ -1,6 +1,7 @@
 //! tissue-sim: an anisotropic soft-tissue cube, simulated by a mass-spring model calibrated
 //! against a linear finite-element reference (Choi, "heuristically parameterized anisotropic
-//! mass-spring model"). See `ARCHITECTURE.md` for the layers, threads and rules.
+//! mass-spring model"). See `ARCHITECTURE.md` for the layers, threads and rules, and `docs/` for
+//! the methods.
 //!
 //! Data flows one way: material -> FEM reference -> cost -> calibration -> model parameters ->
 //! physics thread -> renderer. The folders are the layers, bottom to top; each uses only those
@@ -15,7 +16,8 @@
 //!    step policy, tools, the blow-up guard, the shipped tissues.
 //!    [`gpu`] (3b): the lattices' and the linear FEM's explicit step as wgpu compute shaders,
 //!    behind the simulation's seam.
-//! 4. [`validate`]: the touch benchmark, the dynamic reference and its measurement, static
+//! 4. [`validate`]: the touch benchmark, the material's answer to a probe (the converged
+//!    continuum) and the score against it, the dynamic reference and its measurement, static
 //!    accuracy.
 //! 5. [`calibrate`]: GA+SA, the polish, the load-free stiffness fit.
 //! 6. [`study`]: speed against accuracy, stability, choice, the paper's tables, timings, scripts.

@@ -1,5 +1,5 @@
 //! Layer 8, the interactive viewer: a winit window with a wgpu view of the cube and an egui side
-//! panel. May use every layer below it (render, study, calibrate, validate, sim, response,
+//! panel. May use every layer below it (render, study, calibrate, validate, gpu, sim, response,
 //! mechanics, io); the physics loop runs on its own thread, never in the UI.
 //!
 //! - [`viewer`]: the event loop and the frame; [`surface`]: the window and its wgpu surface.
@@ -24,7 +24,7 @@ pub mod viewer;
 pub mod worker;
 
 /// The headless commands, named when there is no display.
-pub const HEADLESS_HINT: &str = "headless commands: render, simulate, fem, msm, errors, validate, calibrate, reproduce, chart, choose, bench \
+pub const HEADLESS_HINT: &str = "headless commands: render, simulate, fem, msm, errors, validate, calibrate, reproduce, dynamics, chart, choose, bench \
                                  (tissue-sim --help)";
 
 /// True when an X11 or Wayland display is configured.
@@ -52,4 +52,6 @@ pub struct ViewOptions {
     pub model: Option<crate::sim::Model>,
     /// Where its steps are computed.
     pub compute: crate::gpu::Compute,
+    /// Start with the probe pressed into the top face: `[x, y, depth]`, metres.
+    pub press: Option<[f64; 3]>,
 }

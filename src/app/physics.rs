@@ -72,8 +72,8 @@ pub struct Rates {
     pub realtime: f64,
 }
 
-/// What the physics thread publishes.
-#[derive(Debug, Clone, Default)]
+/// What the physics thread publishes: written by `Published::record`, copied by `clone_from`.
+#[derive(Debug, Default)]
 pub struct Published {
     /// Node positions, metres.
     pub positions: Vec<[f32; 3]>,
@@ -175,26 +175,7 @@ impl PhysicsThread {
     /// Copies the latest published state into `into` (reusing its buffers).
     pub fn latest(&self, into: &mut Published) {
         if let Ok(p) = self.shared.lock() {
-            into.positions.clone_from(&p.positions);
-            into.fixed.clone_from(&p.fixed);
-            into.time_s = p.time_s;
-            into.rates = p.rates;
-            (into.ticks_total, into.steps_total, into.running_s) = (p.ticks_total, p.steps_total, p.running_s);
-            into.tool_force = p.tool_force;
-            if into.message != p.message {
-                into.message.clone_from(&p.message);
-            }
-            if into.note != p.note {
-                into.note.clone_from(&p.note);
-            }
-            into.integrator = p.integrator;
-            into.limit = p.limit;
-            into.damping = p.damping;
-            into.params = p.params;
-            into.moving = p.moving;
-            into.tool_commands = p.tool_commands;
-            into.revision = p.revision;
-            into.surface_probe = p.surface_probe;
+            into.clone_from(&p);
         }
     }
 }
@@ -332,8 +313,43 @@ impl Loop {
     }
 }
 
-fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop, totals: (u64, u64, f64)) {
-    if let Ok(mut p) = out.lock() {
+impl Clone for Published {
+    fn clone(&self) -> Self {
+        let mut p = Self::default();
+        p.clone_from(self);
+        p
+    }
+
+    /// Copies `p` into `self`, reusing its buffers (the UI's copy each frame allocates nothing).
+    fn clone_from(&mut self, p: &Self) {
+        let into = self;
+        into.positions.clone_from(&p.positions);
+        into.fixed.clone_from(&p.fixed);
+        into.time_s = p.time_s;
+        into.rates = p.rates;
+        (into.ticks_total, into.steps_total, into.running_s) = (p.ticks_total, p.steps_total, p.running_s);
+        into.tool_force = p.tool_force;
+        if into.message != p.message {
+            into.message.clone_from(&p.message);
+        }
+        if into.note != p.note {
+            into.note.clone_from(&p.note);
+        }
+        into.integrator = p.integrator;
+        into.limit = p.limit;
+        into.damping = p.damping;
+        into.params = p.params;
+        into.moving = p.moving;
+        into.tool_commands = p.tool_commands;
+        into.revision = p.revision;
+        into.surface_probe = p.surface_probe;
+    }
+}
+
+impl Published {
+    /// Records the running simulation's state (the physics thread's one writer of it).
+    fn record(&mut self, sim: &Simulation, rates: Rates, state: &Loop, totals: (u64, u64, f64)) {
+        let p = self;
         let n = sim.tissue.grid().num_nodes();
         p.positions.resize(n, [0.0; 3]);
         sim.positions_f32(&mut p.positions);
@@ -360,6 +376,12 @@ fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop,
         p.tool_commands = state.tools;
         (p.ticks_total, p.steps_total, p.running_s) = totals;
         p.surface_probe = sim.has_surface_probe();
+    }
+}
+
+fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop, totals: (u64, u64, f64)) {
+    if let Ok(mut p) = out.lock() {
+        p.record(sim, rates, state, totals);
     }
 }
 

@@ -22,11 +22,20 @@ pub enum ToolKind {
     Probe,
 }
 
+/// Which material the viewer runs: one of the paper's objects, or a material file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    /// A preset object.
+    Object(crate::mechanics::object::Object),
+    /// The material file at [`ViewSettings::material_path`].
+    File,
+}
+
 /// Settings that only change what the UI shows or will ask for; the panel edits them directly.
 #[derive(Debug, Clone)]
 pub struct ViewSettings {
-    /// `A`, `B` or `file`.
-    pub object: String,
+    /// The material.
+    pub object: Source,
     /// The material file for `file`.
     pub material_path: String,
     /// The left-button tool.
@@ -64,7 +73,7 @@ pub struct ViewSettings {
 impl Default for ViewSettings {
     fn default() -> Self {
         Self {
-            object: "A".into(),
+            object: Source::Object(crate::mechanics::object::Object::A),
             material_path: String::new(),
             tool: ToolKind::Drag,
             probe_radius_mm: 15.0,

@@ -56,7 +56,7 @@ struct App {
 
 impl App {
     fn new(proxy: EventLoopProxy<Wake>, options: super::ViewOptions) -> anyhow::Result<Self> {
-        let super::ViewOptions { frames: max_frames, screenshot, model, compute } = options;
+        let super::ViewOptions { frames: max_frames, screenshot, model, compute, press } = options;
         let egui = egui::Context::default();
         let wake_proxy = proxy.clone();
         egui.set_request_repaint_callback(move |info| {
@@ -75,6 +75,13 @@ impl App {
             Some(crate::sim::Model::Lattice(t)) => requests.push(Request::SelectTopology(t)),
             None if compute != crate::gpu::Compute::Cpu => requests.push(Request::SetCompute),
             None => {}
+        }
+        if let Some([x, y, depth]) = press {
+            // As the probe tool would press it, at the settings' radius.
+            state.settings.tool = crate::app::state::ToolKind::Probe;
+            let r = state.settings.probe_radius_mm * 1e-3;
+            let top = crate::mechanics::grid::CUBE_SIDE_M;
+            requests.push(Request::Tool(crate::sim::Tool::Probe { centre: [x, y, top + r - depth], radius: r }));
         }
         let grid = state.grid();
         // The physics thread builds the model from its recipe: none is built here.

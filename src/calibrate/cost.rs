@@ -59,7 +59,7 @@ pub struct Problem {
     /// The training cases the static objective uses.
     pub case_set: super::CaseSet,
     /// The touch benchmark's FEM answers, when the objective uses them.
-    pub touch: Option<std::sync::Arc<crate::validate::touch_score::Reference>>,
+    pub touch: Option<std::sync::Arc<crate::validate::touch::score::Reference>>,
     /// The continuum's training presses and the material's force on each (newtons), when the
     /// objective uses them.
     pub presses: Option<std::sync::Arc<Vec<(crate::validate::continuum::Press, f64)>>>,
@@ -103,7 +103,7 @@ fn tangent_for<'w>(
 pub struct Workspace {
     tangents: [Option<TangentAssembler>; 3],
     transient: [Option<TangentAssembler>; 3],
-    touch: Option<crate::validate::touch_score::Responder>,
+    touch: Option<crate::validate::touch::score::Responder>,
 }
 
 impl Problem {
@@ -183,7 +183,7 @@ impl Problem {
                     "the axis-spring lattice has no shear stiffness at rest, so the presses cannot train it".into(),
                 ));
             }
-            let forces = crate::validate::probe_score::training_forces(&self.material)
+            let forces = crate::validate::probe::score::training_forces(&self.material)
                 .map_err(|e| CostError::Touch(format!("the material's presses: {e:#}")))?;
             self.presses = Some(std::sync::Arc::new(forces));
         } else if set != super::CaseSet::Paper {
@@ -192,7 +192,7 @@ impl Problem {
                     "the axis-spring lattice has no shear stiffness at rest, so the touch cases cannot train it".into(),
                 ));
             }
-            let reference = crate::validate::touch_score::Reference::new(&self.material, self.grid)
+            let reference = crate::validate::touch::score::Reference::new(&self.material, self.grid)
                 .map_err(|e| CostError::Touch(format!("{e:#}")))?;
             self.touch = Some(std::sync::Arc::new(reference));
         }
@@ -291,7 +291,7 @@ impl Problem {
             let presses = self.presses.as_deref().ok_or_else(|| CostError::Touch("no presses".into()))?;
             let responder = match &mut ws.touch {
                 Some(r) => r,
-                empty => empty.insert(crate::validate::touch_score::Responder::new(
+                empty => empty.insert(crate::validate::touch::score::Responder::new(
                     self.grid,
                     crate::response::linear::GroupedStiffness::lattice(self.grid, self.topology),
                     &[1.0; 7],

@@ -18,7 +18,7 @@ use crate::mechanics::grid::Grid;
 use crate::mechanics::msm::{MsmParams, Topology};
 use crate::response::linear::{GroupedStiffness, with_group_values};
 use crate::validate::touch::Set;
-use crate::validate::touch_score::{Reference, Responder};
+use crate::validate::touch::score::{Reference, Responder};
 
 /// Which stiffness groups are free, and which copy another (a transversely isotropic material,
 /// axis 1 distinct: `k3 = k2`, `c13 = c12`).
@@ -252,7 +252,7 @@ mod tests {
         // The material's training presses (shipped for A), node contact on a 10^3 hex lattice.
         let grid = Grid::new(10).unwrap();
         let m = Material::object_a();
-        let presses = crate::validate::probe_score::training_forces(&m).unwrap();
+        let presses = crate::validate::probe::score::training_forces(&m).unwrap();
         assert_eq!(presses.len(), 24);
         let stiffness = GroupedStiffness::lattice(grid, Topology::Hex);
         let mut responder = Responder::new(grid, stiffness, &[1.0; 7]).unwrap();

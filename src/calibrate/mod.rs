@@ -12,6 +12,9 @@
 //! critical damping `d = 2 m omega_min` of the slowest mode of the calibrated model, clamped as
 //! in the benchmark (the smallest over the three clamped faces, in the mirror-symmetric subspace
 //! the benchmark's loads excite; see [`critical`]).
+//!
+//! [`search`]: GA, SA and the hybrid; [`genes`]: the chromosome and its bounds; [`cost`]: eq. 1 and
+//! the touch and press costs; [`transient`]: the transient cost that identifies `d`.
 
 pub mod cost;
 pub mod critical;

@@ -129,6 +129,33 @@ fn initial_temperature(costs: &[f64]) -> f64 {
     if sd > 0.0 { sd } else { mean.abs().max(1e-12) * 0.1 }
 }
 
+/// What the GA and SA begin with: the generator seeded by `settings.seed`, the evaluator, a
+/// sample of random genes (drawn in order) with their costs, and the history to come.
+struct Start<'a> {
+    rng: Xoshiro256PlusPlus,
+    eval: Evaluator<'a>,
+    sample: Vec<Vec<f64>>,
+    cost: Vec<f64>,
+    history: Vec<GenerationStats>,
+}
+
+impl<'a> Start<'a> {
+    fn new(problem: &'a Problem, space: &'a GeneSpace, settings: &Settings, size: usize) -> Self {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
+        let mut eval = Evaluator::new(problem, space, settings.cost);
+        let sample: Vec<Vec<f64>> = (0..size).map(|_| random_genes(&mut rng, space)).collect();
+        let cost = eval.eval_many(&sample);
+        Self { rng, eval, sample, cost, history: Vec::with_capacity(settings.generations + 1) }
+    }
+}
+
+/// The initial temperature from a sample's costs, and the Lundy-Mees rate that cools it to
+/// `t_final_ratio` of itself over the generations.
+fn cooling(costs: &[f64], settings: &Settings) -> (f64, f64) {
+    let t = initial_temperature(costs);
+    (t, lundy_mees_beta(t, settings.t_final_ratio, settings.generations))
+}
+
 /// Runs the hybrid GA+SA or the pure GA. `screen` enables XSA/MSA.
 #[allow(clippy::too_many_lines, reason = "numeric kernel: one GA+SA generation loop, read best in one piece")]
 pub fn genetic(
@@ -139,15 +166,10 @@ pub fn genetic(
     on_generation: &mut dyn FnMut(&GenerationStats),
 ) -> SearchOutcome {
     let screen = settings.method == Method::Hybrid;
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
-    let mut eval = Evaluator::new(problem, space, settings.cost);
     let np = settings.population.max(2);
-    let mut pop: Vec<Vec<f64>> = (0..np).map(|_| random_genes(&mut rng, space)).collect();
-    let mut cost = eval.eval_many(&pop);
+    let Start { mut rng, mut eval, sample: mut pop, mut cost, mut history } = Start::new(problem, space, settings, np);
     let (mut best, mut best_cost) = best_of(&pop, &cost);
-    let mut t = initial_temperature(&cost);
-    let beta = lundy_mees_beta(t, settings.t_final_ratio, settings.generations);
-    let mut history = Vec::with_capacity(settings.generations + 1);
+    let (mut t, beta) = cooling(&cost, settings);
     let mut cancelled = false;
     for generation in 0..=settings.generations {
         let s = stats(generation, &cost, best_cost, eval.evaluations, t);
@@ -250,20 +272,17 @@ pub fn annealing(
     cancel: &AtomicBool,
     on_generation: &mut dyn FnMut(&GenerationStats),
 ) -> SearchOutcome {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
-    let mut eval = Evaluator::new(problem, space, settings.cost);
-    let mut x = random_genes(&mut rng, space);
-    let mut fx = eval.eval_many(std::slice::from_ref(&x))[0];
+    // The start, then a sample of moves around it: T0 from the sample, as the GA takes it from
+    // its population.
+    let Start { mut rng, mut eval, sample, cost, mut history } =
+        Start::new(problem, space, settings, 1 + settings.sa_iterations.max(2));
+    let (mut x, mut fx) = (sample[0].clone(), cost[0]);
     let (mut best, mut best_cost) = (x.clone(), fx);
-    // T0 from a sample of moves around the start, as the GA takes it from its population.
-    let probe: Vec<Vec<f64>> = (0..settings.sa_iterations.max(2)).map(|_| random_genes(&mut rng, space)).collect();
-    let probe_cost = eval.eval_many(&probe);
-    let mut t = initial_temperature(&probe_cost);
-    let beta = lundy_mees_beta(t, settings.t_final_ratio, settings.generations);
-    let mut history = Vec::with_capacity(settings.generations + 1);
+    let probe_cost = &cost[1..];
+    let (mut t, beta) = cooling(probe_cost, settings);
     history.push(stats(
         0,
-        &probe_cost,
+        probe_cost,
         best_cost.min(probe_cost.iter().copied().fold(f64::INFINITY, f64::min)),
         eval.evaluations,
         t,

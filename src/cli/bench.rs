@@ -26,7 +26,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             crate::io::cache_dir().as_deref(),
             &mut |_| true,
         )?;
-        let report = crate::study::bench_gpu::measure(&gpu, &surface)?;
+        let report = crate::study::bench::gpu::measure(&gpu, &surface)?;
         return if args.json { say(&serde_json::to_string_pretty(&report)?) } else { say_raw(&report.to_text()) };
     }
     let report = crate::study::bench::run()?;

@@ -1,5 +1,6 @@
 //! `tissue-sim choose`: the smallest sufficient model for an error budget and a step rate.
 
+use crate::mechanics::object::Object;
 use std::path::PathBuf;
 
 use anyhow::bail;
@@ -46,9 +47,9 @@ pub struct ChooseArgs {
     /// Real-time step rate the model must keep up with, Hz (1 kHz: haptics).
     #[arg(long, default_value_t = 1000.0, allow_hyphen_values = true)]
     pub rate: f64,
-    /// Object.
+    /// Object: A or B.
     #[arg(long, default_value = "A")]
-    pub object: String,
+    pub object: Object,
     /// Which error the budget bounds.
     #[arg(long, value_enum, default_value = "max")]
     pub metric: Metric,
@@ -69,18 +70,18 @@ pub fn run(args: ChooseArgs) -> anyhow::Result<()> {
         max_probe_error_pct: (args.max_probe_error != 0.0).then_some(args.max_probe_error),
     };
     budget.check()?;
-    let object = args.object.to_ascii_uppercase();
+    let object = args.object;
     let points = match args.chart {
         Some(path) => crate::study::read_chart_csv(&path)?,
         None => {
-            let opts = ChartOptions::new(vec![object.clone()], ChartOptions::default().resolutions)?;
+            let opts = ChartOptions { objects: vec![object], ..ChartOptions::default() };
             crate::study::chart::compute(&opts, &mut |m| eprintln!("{m}"))?.0
         }
     };
     if !points.iter().any(|p| p.object == object) {
         bail!("the chart has no points for object {object}");
     }
-    let choice = crate::study::choose::choose(&points, &object, &budget);
+    let choice = crate::study::choose::choose(&points, object, &budget);
     say(&choice.explanation)?;
     if choice.chosen.is_none() {
         bail!("no model meets the budget");

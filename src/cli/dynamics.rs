@@ -1,6 +1,7 @@
 //! `tissue-sim dynamics`: one model, integrator and step measured against the FEM's dynamic
 //! reference.
 
+use crate::mechanics::object::Object;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
@@ -10,14 +11,14 @@ use super::args::{ObjectArgs, params_from_file};
 use super::output::{say, say_raw};
 use crate::mechanics::grid::Grid;
 use crate::sim::{Integrator, Model};
-use crate::validate::{dynamic_measure, dynamic_reference};
+use crate::validate::dynamic::{measure as dynamic_measure, reference as dynamic_reference};
 
 /// The flags of `dynamics`.
 #[derive(Debug, Args)]
 pub struct DynamicsArgs {
     /// The paper's object: A or B.
-    #[arg(long, value_parser = ["A", "B"], ignore_case = true)]
-    pub object: String,
+    #[arg(long)]
+    pub object: Object,
     /// A calibration result (JSON with `params`); default: the viewer's default tissue.
     #[arg(long, value_name = "FILE.json", conflicts_with = "model")]
     pub params: Option<PathBuf>,
@@ -48,7 +49,7 @@ pub fn run(args: DynamicsArgs) -> anyhow::Result<()> {
     crate::sim::check_dt(dt).map_err(|e| anyhow::anyhow!("--dt {e}"))?;
     let zeta =
         crate::response::damping::check_ratio(damping_ratio).map_err(|e| anyhow::anyhow!("--damping-ratio: {e}"))?;
-    let object_args = ObjectArgs { object: Some(object.to_ascii_uppercase()), material: None };
+    let object_args = ObjectArgs { object: Some(object.name().to_owned()), material: None };
     let (material, choice, p) = match (params, model.as_deref()) {
         (Some(path), _) => {
             let (material, p) = params_from_file(&object_args, &path)?;

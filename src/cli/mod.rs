@@ -4,9 +4,12 @@
 //! One file per subcommand holds its flags (`XxxArgs`) and its `run`; [`args`] holds the flag
 //! groups several share, `values` the names of the core enums on the command line and `output`
 //! the printing. Every rule and computation lives below: the cli may use all the layers
-//! ([`crate::app`], [`crate::render`], [`crate::study`], [`crate::calibrate`], [`crate::validate`],
+//! ([`crate::app`], [`crate::render`], [`crate::study`], [`crate::calibrate`], [`crate::validate`], [`crate::gpu`],
 //! [`crate::sim`], [`crate::response`], [`crate::mechanics`], [`crate::io`]), and clap lives only
 //! here.
+//!
+//! Subcommands: [`fem`], [`msm`], [`errors`], [`validate`], [`calibrate`], [`reproduce`],
+//! [`dynamics`], [`chart`], [`choose`], [`mod@bench`], [`render`], [`simulate`], [`view`].
 
 use std::process::ExitCode;
 

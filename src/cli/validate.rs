@@ -9,7 +9,7 @@ use super::args::{GridArgs, ObjectArgs, params_from_file};
 use super::output::{say, say_raw};
 use crate::mechanics::sparse::DirectSolve;
 use crate::sim::Model;
-use crate::validate::touch_score;
+use crate::validate::touch::score as touch_score;
 
 /// The flags of `validate`.
 #[derive(Debug, Args)]
@@ -102,7 +102,7 @@ struct Full {
     #[serde(flatten)]
     report: touch_score::Report,
     #[serde(skip_serializing_if = "Option::is_none")]
-    material: Option<crate::validate::probe_score::MaterialReport>,
+    material: Option<crate::validate::probe::score::MaterialReport>,
 }
 
 /// The probe presses of `model` against the material, the same-mesh FEM beside it.
@@ -112,8 +112,9 @@ fn against_material(
     model: (Model, Option<crate::mechanics::msm::MsmParams>),
     cache: Option<PathBuf>,
     contact: &str,
-) -> anyhow::Result<crate::validate::probe_score::MaterialReport> {
-    use crate::validate::{continuum, continuum_cache, probe_score};
+) -> anyhow::Result<crate::validate::probe::score::MaterialReport> {
+    use crate::validate::continuum::{self, cache as continuum_cache};
+    use crate::validate::probe::score as probe_score;
     let dir = cache.or_else(crate::io::cache_dir);
     let mut kept = continuum_cache::ContinuumCache::open(material, dir.as_deref());
     let (mut responder, _) = touch_score::responder(model.0, model.1, material, grid)?;

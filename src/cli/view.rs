@@ -20,6 +20,26 @@ pub struct ViewArgs {
     /// Where the model's steps are computed.
     #[arg(long, value_enum, default_value = "cpu")]
     pub compute: crate::gpu::Compute,
+    /// Start with the probe pressed DEPTH into the top face at (X, Y), metres (for a
+    /// screenshot): X and Y in 0..0.1, DEPTH in 0..0.02.
+    #[arg(long, value_name = "X,Y,DEPTH", value_parser = parse_press)]
+    pub press: Option<[f64; 3]>,
+}
+
+fn parse_press(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> =
+        s.split(',').map(|w| w.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|e| format!("{e}"))?;
+    let [x, y, depth] = v[..] else {
+        return Err(format!("expected X,Y,DEPTH (three numbers), got {} numbers", v.len()));
+    };
+    let side = crate::mechanics::grid::CUBE_SIDE_M;
+    if !((0.0..=side).contains(&x) && (0.0..=side).contains(&y)) {
+        return Err(format!("the point ({x}, {y}) is off the top face (0 to {side} m)"));
+    }
+    if !(depth > 0.0 && depth <= 0.02) {
+        return Err(format!("depth {depth} m is out of range (0 to 0.02 m)"));
+    }
+    Ok([x, y, depth])
 }
 
 fn parse_model(s: &str) -> Result<crate::sim::Model, String> {
@@ -33,5 +53,6 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         screenshot: args.screenshot,
         model: args.model,
         compute: args.compute,
+        press: args.press,
     })
 }

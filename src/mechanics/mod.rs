@@ -2,7 +2,8 @@
 //!
 //! - [`grid`]: nodes, elements and spring families of the cube; [`material`]: engineering
 //!   constants, `S` and `C`; [`cases`]: the benchmark's load cases and their answers;
-//!   [`displacement_file`]: the spec's JSON of case answers.
+//!   [`displacement_file`]: the spec's JSON of case answers; [`object`]: the paper's objects A and
+//!   B by name.
 //! - [`sparse`]: faer's sparse Cholesky behind one SPD system type.
 //! - [`fem`]: hex8 statics and dynamics; [`msm`]: the mass-spring lattices, statics and dynamics.
 //! - [`parallel`]: the physics' own thread pool; [`anchor`]: a node held by a spring inside an
@@ -20,5 +21,6 @@ pub mod kinetic;
 pub mod material;
 pub mod msm;
 pub mod newton_krylov;
+pub mod object;
 pub mod parallel;
 pub mod sparse;

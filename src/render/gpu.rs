@@ -68,10 +68,12 @@ fn shader(device: &wgpu::Device, label: &str, source: &'static str) -> wgpu::Sha
     })
 }
 
-/// The WGSL sources, compiled into the binary.
-pub const SURFACE_WGSL: &str = include_str!("../../shaders/surface.wgsl");
-/// The WGSL sources, compiled into the binary.
-pub const LINES_WGSL: &str = include_str!("../../shaders/lines.wgsl");
+/// The WGSL sources, compiled into the binary: the shared uniforms, then each shader.
+pub const SURFACE_WGSL: &str =
+    concat!(include_str!("../../shaders/globals.wgsl"), include_str!("../../shaders/surface.wgsl"));
+/// The WGSL sources, compiled into the binary: the shared uniforms, then each shader.
+pub const LINES_WGSL: &str =
+    concat!(include_str!("../../shaders/globals.wgsl"), include_str!("../../shaders/lines.wgsl"));
 
 impl CubeRenderer {
     /// Creates pipelines for colour target `format` and buffers for `mesh` and up to

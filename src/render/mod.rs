@@ -1,6 +1,9 @@
 //! Layer 7, rendering of the tissue cube: the surface mesh and camera (CPU, no GPU types), the
 //! wgpu renderer shared by the window and the offscreen path, headless rendering to PNG, and what
-//! a static scene draws ([`scene`]). May use: sim, mechanics, io.
+//! a static scene draws ([`scene`]). May use: gpu (the adapter a compute step shares), sim, mechanics, io.
+//!
+//! [`mesh`]: the surface mesh; [`camera`]: the orbit camera; [`gpu`]: the wgpu renderer;
+//! [`offscreen`]: rendering to PNG.
 
 pub mod camera;
 pub mod gpu;

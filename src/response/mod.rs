@@ -12,6 +12,9 @@
 //!   mode, in closed form.
 //!
 //! May use: [`crate::mechanics`], [`crate::io`].
+//!
+//! [`surface_compliance`]: the top face's contact compliance of a fine FEM, the probe's force from
+//! the material.
 
 pub mod damping;
 pub mod linear;

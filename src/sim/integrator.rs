@@ -43,6 +43,13 @@ impl Integrator {
     }
 }
 
+/// The integrator's [`Integrator::name`] (width and alignment honoured).
+impl std::fmt::Display for Integrator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.name())
+    }
+}
+
 /// The time steps a run may ask for, s: from 1 us to 50 ms.
 pub const DT_RANGE_S: std::ops::RangeInclusive<f64> = 1e-6..=0.05;
 

@@ -11,6 +11,9 @@
 //! - [`tool`]: drag and probe; [`simulation`]: the running tissue, its tools and its guard.
 //!
 //! May use: [`crate::response`], [`crate::mechanics`], [`crate::io`].
+//!
+//! [`surface_probe`]: the probe on the material's surface compliance; [`modal_lag`]: its slow modes
+//! lagging behind their static answer.
 
 /// The interactive tick, ms: the viewer's physics loop advances the clock by one tick at a time
 /// (its steps substep it), the probe's contact solve runs at most once a tick (the haptic rate),

@@ -116,6 +116,13 @@ impl From<Model> for String {
     }
 }
 
+/// The model's [`Model::name`] (width and alignment honoured).
+impl std::fmt::Display for Model {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(&self.name())
+    }
+}
+
 impl TryFrom<String> for Model {
     type Error = String;
     fn try_from(s: String) -> Result<Self, String> {

@@ -156,7 +156,7 @@ impl Budget {
 /// Picks, among the points of `object` whose step fits in a tick, the one with the least wall
 /// time per real-time tick (`1 / rate_hz`; as many steps of the point's `dt_s` as a tick needs)
 /// that meets `budget` and whose tick fits in `1 / rate_hz`. Ties go to less memory.
-pub fn choose(points: &[ChartPoint], object: &str, budget: &Budget) -> Choice {
+pub fn choose(points: &[ChartPoint], object: crate::mechanics::object::Object, budget: &Budget) -> Choice {
     let rate_hz = budget.rate_hz;
     let budget_s = 1.0 / rate_hz;
     let mut mine: Vec<&ChartPoint> = points.iter().filter(|p| p.object == object && p.fits_rate(rate_hz)).collect();
@@ -356,7 +356,7 @@ mod tests {
         let force_err_pct = max_err_pct * 3.0;
         let dt_s = if dt_max_s.is_finite() { 0.9 * dt_max_s } else { 1e-3 };
         ChartPoint {
-            object: "A".into(),
+            object: crate::mechanics::object::Object::A,
             model,
             n: 8,
             integrator,
@@ -406,29 +406,41 @@ mod tests {
             point(FINE, Integrator::Prefactored, 2e-3, f64::INFINITY, 0.1),
         ];
         assert_eq!(points[0].substeps(1000.0), 12.0);
-        let c = choose(&points, "A", &budget(6.0, 1000.0));
+        let c = choose(&points, crate::mechanics::object::Object::A, &budget(6.0, 1000.0));
         assert_eq!(c.chosen.map(|p| p.model), Some(IMPLICIT), "{}", c.explanation);
-        let c = choose(&points, "A", &budget(1.5, 1000.0));
+        let c = choose(&points, crate::mechanics::object::Object::A, &budget(1.5, 1000.0));
         assert!(c.chosen.is_none());
         assert!(c.explanation.contains(&format!("cheapest is {}", FINE.chart_name())), "{}", c.explanation);
         // At 10 Hz the fine model's 100 ms implicit step fits its tick.
         let mut points = points;
         points.push(ChartPoint { dt_s: 0.1, cost_per_sim_s: 2e-3 / 0.1, ..points[3].clone() });
-        let c = choose(&points, "A", &budget(1.5, 10.0));
+        let c = choose(&points, crate::mechanics::object::Object::A, &budget(1.5, 10.0));
         assert_eq!(c.chosen.map(|p| p.model), Some(FINE), "{}", c.explanation);
         // A dynamic budget: the implicit point's period error of 0.5 % fails 0.4 %.
-        let c = choose(&points, "A", &Budget { max_period_error_pct: Some(0.4), ..budget(6.0, 1000.0) });
+        let c = choose(
+            &points,
+            crate::mechanics::object::Object::A,
+            &Budget { max_period_error_pct: Some(0.4), ..budget(6.0, 1000.0) },
+        );
         assert_ne!(c.chosen.as_ref().map(|p| p.model), Some(IMPLICIT), "{}", c.explanation);
         assert!(c.explanation.contains("period error 0.50 % > 0.4 %"), "{}", c.explanation);
-        let c = choose(&points, "A", &Budget { max_damping_error_pct: Some(0.2), ..budget(6.0, 1000.0) });
+        let c = choose(
+            &points,
+            crate::mechanics::object::Object::A,
+            &Budget { max_damping_error_pct: Some(0.2), ..budget(6.0, 1000.0) },
+        );
         assert!(c.explanation.contains("damping error 0.25 % > 0.2 % of critical"), "{}", c.explanation);
         // A static bound on the paper's cases as well: the implicit point's 1 % fails 0.5 %.
-        let c = choose(&points, "A", &Budget { max_error_pct: Some(0.5), ..budget(6.0, 10.0) });
+        let c = choose(
+            &points,
+            crate::mechanics::object::Object::A,
+            &Budget { max_error_pct: Some(0.5), ..budget(6.0, 10.0) },
+        );
         assert_eq!(c.chosen.map(|p| p.model), Some(FINE), "{}", c.explanation);
         // A point without a touch score never meets a force budget.
         let mut unscored = points.clone();
         unscored[1].force_err_pct = f64::NAN;
-        let c = choose(&unscored, "A", &budget(6.0, 1000.0));
+        let c = choose(&unscored, crate::mechanics::object::Object::A, &budget(6.0, 1000.0));
         assert_ne!(c.chosen.map(|p| p.model), Some(IMPLICIT));
         // A probe budget: the implicit point's own contact misses it, the surface compliance
         // meets it for 3 us more per tick (8 us: still in the 1 ms tick) and is chosen so.
@@ -437,12 +449,12 @@ mod tests {
             (p.probe_err_pct, p.surface_probe_err_pct, p.surface_probe_tick_s) = (40.0, 5.0, 3e-6);
         }
         let b = Budget { max_probe_error_pct: Some(7.0), ..budget(6.0, 1000.0) };
-        let c = choose(&probed, "A", &b);
+        let c = choose(&probed, crate::mechanics::object::Object::A, &b);
         assert_eq!(c.chosen.as_ref().map(|p| p.model), Some(IMPLICIT), "{}", c.explanation);
         assert!(c.explanation.contains("surface compliance as its contact (3.00 us"), "{}", c.explanation);
         // A tighter probe budget than either contact meets: nothing is chosen, and it says why.
         probed[1].probe_err_pct = 8.0;
-        let c = choose(&probed, "A", &Budget { max_probe_error_pct: Some(4.0), ..b });
+        let c = choose(&probed, crate::mechanics::object::Object::A, &Budget { max_probe_error_pct: Some(4.0), ..b });
         assert!(c.chosen.is_none() && c.explanation.contains("probe force error"), "{}", c.explanation);
     }
 }

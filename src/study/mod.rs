@@ -1,23 +1,15 @@
-//! Layer 6, studies: speed against accuracy ([`chart`], one point [`chart_point`], the
-//! measurement of one model [`chart_measure`], [`pareto`] fronts, [`plot`]), the stability study
-//! of explicit integration ([`stability`]), the choice of the smallest model that meets a scene's
-//! error and rate budget ([`choose`]), the paper's tables and figures ([`reproduce`]), timings
-//! ([`timing`], [`bench`](mod@bench), its [`bench_sweep`] of resolutions and [`bench_gpu`], both
-//! on the viewer's scene with the probe [`pressed`]) and scripted
-//! interaction ([`script`], `simulate`).
+//! Layer 6, studies: speed against accuracy ([`chart`]: its points, their measurement, Pareto
+//! fronts and plots), the stability study of explicit integration ([`stability`]), the choice of
+//! the smallest model that meets a scene's error and rate budget ([`choose`]), the paper's tables
+//! and figures ([`reproduce`]), timings ([`timing`], [`bench`](mod@bench): its sweep of
+//! resolutions and its GPU figures, both on the viewer's scene with the probe pressed) and
+//! scripted interaction ([`script`], `simulate`).
 //!
 //! May use: calibrate, validate, gpu, sim, response, mechanics, io.
 
 pub mod bench;
-pub mod bench_gpu;
-pub mod bench_sweep;
 pub mod chart;
-pub mod chart_measure;
-pub mod chart_point;
 pub mod choose;
-pub mod pareto;
-pub mod plot;
-pub mod pressed;
 pub mod reproduce;
 pub mod script;
 pub mod stability;
@@ -32,7 +24,9 @@ use crate::io::OutputDir;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmModel, Topology};
+use crate::mechanics::object::Object;
 use crate::sim::{Integrator, Model};
+use chart::plot;
 use chart::{ChartOptions, ChartPoint};
 use stability::StabilityPoint;
 
@@ -49,7 +43,7 @@ pub fn stability_study(progress: &mut dyn FnMut(&str)) -> anyhow::Result<Vec<Sta
             for &s in scales {
                 progress(&format!("stability: msm-{} at {n}^3, stiffness x{s}", topology.name()));
                 let model = MsmModel::new(grid, stability::scaled_undamped(&params, s), material.density)?;
-                out.push(stability::msm_point(&format!("msm-{}", topology.name()), &model, s));
+                out.push(stability::msm_point(&model, s));
             }
         }
     }
@@ -104,9 +98,9 @@ fn dynamic_crossings(md: &mut String, points: &[ChartPoint]) {
         "## Where the dynamic error crosses 5 %\n\n| object | model | integrator | trajectory error | period error | \
          damping error (% of critical) |\n|---|---|---|---|---|---|"
     );
-    let mut keys: Vec<(String, Model, Integrator)> = Vec::new();
+    let mut keys: Vec<(Object, Model, Integrator)> = Vec::new();
     for p in points.iter().filter(|p| p.dyn_err_pct.is_finite()) {
-        let k = (p.object.clone(), p.model, p.integrator);
+        let k = (p.object, p.model, p.integrator);
         if !keys.contains(&k) {
             keys.push(k);
         }
@@ -268,7 +262,12 @@ pub fn write_chart(
             let _ = writeln!(
                 md,
                 "| {} | {} | {} | {:.4e} | {:.4e} | {:.5} |",
-                p.model, p.n, p.stiffness_scale, p.dt_analytic_s, p.dt_measured_s, p.ratio
+                p.model.chart_name(),
+                p.n,
+                p.stiffness_scale,
+                p.dt_analytic_s,
+                p.dt_measured_s,
+                p.ratio
             );
         }
         let _ = writeln!(md, "\nWall time: chart {chart_s:.1} s, with the stability study {total_s:.1} s.");

@@ -102,8 +102,9 @@ pub fn bisect_dt(guess: f64, mut stable: impl FnMut(f64) -> bool) -> f64 {
 /// One row of the stability study.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct StabilityPoint {
-    /// Model name (`msm-axis`, `msm-hex`, `fem-linear`).
-    pub model: String,
+    /// The model (`msm-axis`, `msm-hex`, `fem-linear` in files).
+    #[serde(serialize_with = "crate::study::chart::point::chart_names::serialize_model")]
+    pub model: crate::sim::Model,
     /// Nodes per axis.
     pub n: usize,
     /// Factor on every stiffness (springs or material).
@@ -119,13 +120,13 @@ pub struct StabilityPoint {
 }
 
 /// Measured and analytic critical `dt` of an undamped MSM (one face clamped).
-pub fn msm_point(name: &str, model: &MsmModel, scale: f64) -> StabilityPoint {
+pub fn msm_point(model: &MsmModel, scale: f64) -> StabilityPoint {
     let case = LoadCase::clamped(&model.grid, "A", 1, 0.0);
     let omega = msm_omega_max(model, &case.fixed_nodes(), STUDY_ITERATIONS);
     let analytic = 2.0 / omega;
     let measured = bisect_dt(analytic, |dt| msm_stable(model, &case, dt));
     StabilityPoint {
-        model: name.into(),
+        model: crate::sim::Model::Lattice(model.params.topology()),
         n: model.grid.n(),
         stiffness_scale: scale,
         omega_max: omega,
@@ -146,7 +147,7 @@ pub fn fem_point(material: &Material, grid: Grid, scale: f64) -> StabilityPoint 
     let analytic = 2.0 / omega;
     let measured = bisect_dt(analytic, |dt| fem_stable(&mut fem, dt));
     StabilityPoint {
-        model: "fem-linear".into(),
+        model: crate::sim::Model::Fem(Formulation::Linear),
         n: grid.n(),
         stiffness_scale: scale,
         omega_max: omega,

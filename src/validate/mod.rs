@@ -1,24 +1,21 @@
 //! Layer 4, validation: how good a model is, measured against references it was not fitted to.
 //!
 //! - [`touch`]: the touch benchmark's cases (point loads, top-face shear, the probe, modes) and
-//!   their training and validation sets; [`touch_score`]: the same-mesh FEM's answers and the
+//!   their training and validation sets; [`touch::score`]: the same-mesh FEM's answers and the
 //!   scores of a model against them (`validate`).
-//! - [`dynamic_reference`]: the converged FEM transients of a scene (Newmark average
-//!   acceleration, the step halved until the answer changes by less than 0.1 %);
-//!   [`dynamic_measure`]: a running model's period, decay and trajectory error, by time stepping
-//!   the simulation (`dynamics`).
+//! - [`continuum`]: the material's answer to a probe (graded hex8 meshes refined until the force
+//!   stops changing), its fast tap ([`continuum::tap`]) and where both are kept
+//!   ([`continuum::cache`]).
+//! - [`probe`]: the presses a probe is scored on and the score against the material, and the
+//!   viewer's tap against the material's.
+//! - [`dynamic`]: the converged FEM transients of a scene and a running model's period, decay
+//!   and trajectory error against them (`dynamics`).
 //! - [`accuracy`]: the paper's cost and error tables of static answers (`errors`).
 //!
 //! May use: [`crate::sim`], [`crate::response`], [`crate::mechanics`], [`crate::io`].
 
 pub mod accuracy;
 pub mod continuum;
-pub mod continuum_cache;
-pub mod continuum_tap;
-pub mod dynamic_measure;
-pub mod dynamic_reference;
-pub mod presses;
-pub mod probe_score;
-pub mod tap;
+pub mod dynamic;
+pub mod probe;
 pub mod touch;
-pub mod touch_score;

@@ -8,8 +8,8 @@ use tissue_sim::mechanics::material::Material;
 use tissue_sim::mechanics::msm::Topology;
 use tissue_sim::response::single_mode::{self, Scheme};
 use tissue_sim::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, choose_step};
-use tissue_sim::validate::dynamic_measure::{Configuration, References, measure, modal_model};
-use tissue_sim::validate::dynamic_reference::{self, Transient, view_scene};
+use tissue_sim::validate::dynamic::measure::{Configuration, References, measure, modal_model};
+use tissue_sim::validate::dynamic::reference::{self as dynamic_reference, Transient, view_scene};
 
 const ZETA: f64 = 0.2;
 

@@ -5,8 +5,8 @@
 use tissue_sim::mechanics::material::Material;
 use tissue_sim::response::surface_compliance::{ContactScratch, DEFAULT_DIVISIONS, SurfaceCompliance};
 use tissue_sim::validate::continuum::DEFAULT_TOLERANCE;
-use tissue_sim::validate::continuum_cache::ContinuumCache;
-use tissue_sim::validate::presses::press_cases;
+use tissue_sim::validate::continuum::cache::ContinuumCache;
+use tissue_sim::validate::probe::presses::press_cases;
 
 #[test]
 fn the_surface_compliance_feels_like_the_material_wherever_the_probe_lands() {

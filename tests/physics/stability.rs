@@ -28,9 +28,9 @@ fn measured_critical_dt_is_within_5_percent_of_2_over_omega_max() {
     )
     .expect("model");
     let points = [
-        msm_point("msm-axis", &axis, 1.0),
-        msm_point("msm-hex", &hex_model(Grid::paper(), 10.0), 10.0),
-        msm_point("msm-hex", &hex_model(Grid::new(5).expect("grid"), 1.0), 1.0),
+        msm_point(&axis, 1.0),
+        msm_point(&hex_model(Grid::paper(), 10.0), 10.0),
+        msm_point(&hex_model(Grid::new(5).expect("grid"), 1.0), 1.0),
         fem_point(&a, Grid::new(4).expect("grid"), 1.0),
     ];
     for p in &points {
@@ -44,7 +44,7 @@ fn measured_critical_dt_is_within_5_percent_of_2_over_omega_max() {
         );
     }
     // Stiffness x10 shortens the critical step by sqrt(10).
-    let base = msm_point("msm-hex", &hex_model(Grid::paper(), 1.0), 1.0);
+    let base = msm_point(&hex_model(Grid::paper(), 1.0), 1.0);
     let r = base.dt_measured_s / points[1].dt_measured_s;
     assert!((r - 10f64.sqrt()).abs() < 1e-3 * r, "ratio {r}");
 }
@@ -53,7 +53,7 @@ fn measured_critical_dt_is_within_5_percent_of_2_over_omega_max() {
 fn explicit_is_bounded_at_0_9_dt_crit_and_diverges_at_1_2_dt_crit_with_the_guard_reporting_it() {
     let grid = Grid::paper();
     let model = hex_model(grid, 1.0);
-    let dt_crit = msm_point("msm-hex", &model, 1.0).dt_measured_s;
+    let dt_crit = msm_point(&model, 1.0).dt_measured_s;
     let case = LoadCase::clamped(&grid, "A", 3, 10.0);
     // Below: 20 000 undamped steps under a 10 N step load stay bounded (the motion oscillates
     // about the equilibrium, at most about twice its displacement).

@@ -12,7 +12,7 @@ use tissue_sim::mechanics::material::Material;
 use tissue_sim::mechanics::msm::{MsmParams, Topology};
 use tissue_sim::response::linear::{group_values, with_group_values};
 use tissue_sim::sim::Model;
-use tissue_sim::validate::touch_score::{Reference, evaluate};
+use tissue_sim::validate::touch::score::{Reference, evaluate};
 
 #[test]
 fn shipped_tissues_record_their_validation_scores_and_the_default_is_the_best() {

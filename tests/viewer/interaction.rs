@@ -5,7 +5,7 @@ use tissue_sim::study::script::{Action, Script, run};
 
 fn script(actions: Vec<Action>) -> Script {
     Script {
-        object: "A".into(),
+        object: tissue_sim::mechanics::object::Object::A,
         model: tissue_sim::sim::Model::Lattice(tissue_sim::mechanics::msm::Topology::Shear),
         dt: 1e-4,
         integrator: None,

@@ -1,5 +1,8 @@
 //! The side panel: a status header, then one section a file. Sections edit the pure view
 //! settings directly and return [`Request`]s for everything else; none calls the physics thread.
+//!
+//! One file per section: [`model`] (object, model, resolution, compute), [`integrator`], [`tools`],
+//! [`view`], [`calibration`] and [`study`] (speed vs accuracy).
 
 pub mod calibration;
 pub mod integrator;
@@ -9,6 +12,7 @@ pub mod tools;
 pub mod view;
 
 use super::physics::Published;
+use super::settings::Source;
 use super::state::{Request, Shown, ViewSettings};
 use crate::render::camera::OrbitCamera;
 use study::StudyPanel;
@@ -53,8 +57,12 @@ pub fn show(
     egui::CollapsingHeader::new("View").default_open(true).show(ui, |ui| view::show(ui, settings, camera));
     egui::CollapsingHeader::new("Speed vs accuracy").default_open(false).show(ui, |ui| {
         let repaint = ui.ctx().clone();
-        let object = if settings.object == "file" { shown.material.name.clone() } else { settings.object.clone() };
-        study.ui(ui, &object, move || repaint.request_repaint());
+        match settings.object {
+            Source::Object(object) => study.ui(ui, object, move || repaint.request_repaint()),
+            Source::File => {
+                ui.label("The chart covers the objects A and B.");
+            }
+        }
     });
     egui::CollapsingHeader::new("Calibration (GA+SA)")
         .default_open(true)

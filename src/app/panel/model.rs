@@ -1,10 +1,12 @@
 //! Panel section "Object and model": the object (a preset or a material file), the lattice, and
 //! its parameters, edited live.
 
+use crate::app::settings::Source;
 use crate::app::state::{Request, Shown, ViewSettings};
 use crate::gpu::Compute;
 use crate::mechanics::fem::dynamics::Formulation;
 use crate::mechanics::msm::Topology;
+use crate::mechanics::object::Object;
 use crate::sim::Model;
 
 /// The touch force budget as a fraction (its one home: [`crate::study::choose`]).
@@ -91,11 +93,12 @@ fn compute(ui: &mut egui::Ui, settings: &mut ViewSettings, requests: &mut Vec<Re
 pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, requests: &mut Vec<Request>) {
     let mut reload = false;
     ui.horizontal(|ui| {
-        for o in ["A", "B", "file"] {
-            reload |= ui.selectable_value(&mut settings.object, o.to_owned(), o).changed();
+        for object in Object::ALL {
+            reload |= ui.selectable_value(&mut settings.object, Source::Object(object), object.name()).changed();
         }
+        reload |= ui.selectable_value(&mut settings.object, Source::File, "file").changed();
     });
-    if settings.object == "file" {
+    if settings.object == Source::File {
         ui.horizontal(|ui| {
             ui.text_edit_singleline(&mut settings.material_path);
             reload |= ui.button("Load").clicked();

@@ -4,6 +4,7 @@
 use egui_plot::{Corner, Legend, MarkerShape, Plot, PlotPoints, Points};
 
 use crate::app::worker::{Slot, State};
+use crate::mechanics::object::Object;
 use crate::sim::Integrator;
 use crate::sim::Model;
 use crate::study::chart::{ChartOptions, ChartPoint, compute};
@@ -92,7 +93,7 @@ impl StudyPanel {
     }
 
     /// Draws the section for `object`; `wake` repaints the UI from the worker thread.
-    pub fn ui(&mut self, ui: &mut egui::Ui, object: &str, wake: impl Fn() + Send + Sync + 'static) {
+    pub fn ui(&mut self, ui: &mut egui::Ui, object: Object, wake: impl Fn() + Send + Sync + 'static) {
         self.poll();
         ui.horizontal(|ui| {
             let busy = self.job.busy();
@@ -158,8 +159,7 @@ impl StudyPanel {
         self.job.busy()
     }
 
-    fn start(&mut self, object: &str, wake: impl Fn() + Send + Sync + 'static) {
-        let object = object.to_owned();
+    fn start(&mut self, object: Object, wake: impl Fn() + Send + Sync + 'static) {
         let started = self.job.start("chart", wake, move |ctx| {
             // Cancelled (the viewer closing) between points, so that dropping the job is quick.
             let opts = ChartOptions {

@@ -98,9 +98,9 @@ impl ViewerState {
             "touch validation",
             move || wake(),
             move |ctx| {
-                let r = crate::validate::touch_score::Reference::new(&material, grid)
+                let r = crate::validate::touch::score::Reference::new(&material, grid)
                     .and_then(|reference| {
-                        crate::validate::touch_score::evaluate(&reference, &material, model.0, Some(model.1))
+                        crate::validate::touch::score::evaluate(&reference, &material, model.0, Some(model.1))
                     })
                     .map(|r| crate::sim::shipped::RecordedScores {
                         worst_force_error: r.worst_force_error,
@@ -131,7 +131,7 @@ impl ViewerState {
             move || wake(),
             move |ctx| {
                 let force = |(m, p): (Model, MsmParams)| -> anyhow::Result<f64> {
-                    let (mut r, _) = crate::validate::touch_score::responder(m, Some(p), &material, grid)?;
+                    let (mut r, _) = crate::validate::touch::score::responder(m, Some(p), &material, grid)?;
                     Ok(r.solver.probe(&grid, centre, radius)?.force_n())
                 };
                 let fem = force((Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear), model.1));

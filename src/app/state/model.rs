@@ -2,6 +2,7 @@
 
 use super::ViewerState;
 use crate::app::physics::Command;
+use crate::app::settings::Source;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::Topology;
@@ -9,19 +10,15 @@ use crate::mechanics::msm::Topology;
 impl ViewerState {
     pub(super) fn load_object(&mut self, topology: Topology, send: &mut dyn FnMut(Command)) {
         self.shown.note = None;
-        let material = if self.settings.object == "file" {
-            match Material::from_file(std::path::Path::new(self.settings.material_path.trim())) {
+        let material = match self.settings.object {
+            Source::File => match Material::from_file(std::path::Path::new(self.settings.material_path.trim())) {
                 Ok(m) => m,
                 Err(e) => {
                     self.shown.note = Some(format!("{e:#}"));
                     return;
                 }
-            }
-        } else {
-            match Material::preset(&self.settings.object) {
-                Some(m) => m,
-                None => return,
-            }
+            },
+            Source::Object(object) => object.material(),
         };
         let params = crate::sim::shipped::msm_params_at(&material, topology, &self.grid).unwrap_or_else(|_| {
             // No shipped calibration: start from the material-derived scale and suggest calibrating.

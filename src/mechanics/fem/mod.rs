@@ -5,6 +5,10 @@
 //! are eliminated, the reduced stiffness is factorised once per constraint set with faer's sparse
 //! Cholesky (symbolic analysis kept), and every solve is followed by iterative refinement on the
 //! element-by-element residual so that answers sit at round-off.
+//!
+//! [`clamped`]: the clamped cases by symmetry; [`stencil`]: the linear FEM's `K u` as a stencil;
+//! [`corotation`]: the corotated element force; [`dynamics`]: lumped masses, damping and the steps;
+//! [`graded`]: meshes graded around a contact.
 
 pub mod clamped;
 pub mod corotation;

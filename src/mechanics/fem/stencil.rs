@@ -5,7 +5,7 @@
 //! product costs at most 243 multiply-adds a node, gathered row by row (no scatter), against the
 //! element loop's 576 a node scattered over eight elements. With an orthotropic material on the
 //! grid's axes most blocks couple few components (`Pattern`): 153 multiply-adds a node inside
-//! the cube (measured in a scratch harness, one core, 24^3, the linear FEM's 1 ms tick of six
+//! the cube (measured on one core, 24^3, the linear FEM's 1 ms tick of six
 //! substeps with the probe pressed: 1.98 to 2.17 ms with every entry, 1.81 to 1.85 without the
 //! zero ones, runs alternated).
 //!
@@ -17,7 +17,9 @@
 //! along y likewise, gathered n apart. Every node's sum is the same sequence of operations in
 //! both layouts and on every path, so in `f64` the bits are the same. The `f32` product (the
 //! linear FEM's `cpu-f32` step) took 105 to 106 us at 24^3 on one core against 178 to 181 us in
-//! `f64` (a scratch harness, minimum of 30 batches of 100 products, three runs).
+//! `f64` (minimum of 30 batches of 100 products, three runs; see `docs/speed.md`).
+//!
+//! `run`: a run of rows, one node at a time or in AVX2 registers.
 
 use super::element::{ElementStiffness, NODE_SIDES};
 use crate::mechanics::grid::Grid;
@@ -418,260 +420,11 @@ impl Stencil {
     }
 }
 
-/// The rows of a [`Run`] into `out[..][l stride]`, one node at a time.
-fn run_scalar<T: Precision>(taps: &ClassTaps<T>, u: [&[T]; 3], run: Run, out: [&mut [T]; 3]) {
-    let load = |q: usize| [u[0][q], u[1][q], u[2][q]];
-    let [o0, o1, o2] = out;
-    for l in 0..run.len {
-        let acc = row_sum(taps, run.from + l * run.stride, load);
-        let at = l * run.stride;
-        (o0[at], o1[at], o2[at]) = (acc[0], acc[1], acc[2]);
-    }
-}
+mod run;
 
-/// A [`Run`]'s rows with AVX2, `W` nodes a register (4 in `f64`, 8 in `f32`): along x two
-/// registers at a time (each of a tap's entries broadcast once for both), then one; along y
-/// one, gathered; the last group overlapping the ones before where the run is not a multiple of
-/// `W` (the same sums written twice); at least `W` nodes. No fused multiply-add, so every node's
-/// sum has the bits of [`row_sum`].
-macro_rules! simd_run {
-    ($run:ident, $group:ident, $gather:ident, $t:ty, $w:expr, $vec:ident, $zero:ident, $set1:ident,
-     $load:ident, $store:ident, $mul:ident, $add:ident) => {
-        /// The rows of a run ([`simd_run`]).
-        #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx2")]
-        unsafe fn $run(taps: &ClassTaps<$t>, u: [&[$t]; 3], run: Run, out: [&mut [$t]; 3]) {
-            debug_assert!(run.len >= $w && out.iter().all(|o| o.len() > (run.len - 1) * run.stride));
-            let [o0, o1, o2] = out;
-            let mut s = 0;
-            if run.stride == 1 {
-                while s + 2 * $w <= run.len {
-                    // SAFETY: the caller's CPU supports AVX2 (this function's own feature).
-                    unsafe { $group::<2, false>(taps, u, run, s, [&mut *o0, &mut *o1, &mut *o2]) };
-                    s += 2 * $w;
-                }
-            }
-            while s < run.len {
-                let start = s.min(run.len - $w);
-                // SAFETY: as above.
-                unsafe {
-                    if run.stride == 1 {
-                        $group::<1, false>(taps, u, run, start, [&mut *o0, &mut *o1, &mut *o2]);
-                    } else {
-                        $group::<1, true>(taps, u, run, start, [&mut *o0, &mut *o1, &mut *o2]);
-                    }
-                }
-                s = start + $w;
-            }
-        }
-
-        /// The rows of the `W V` nodes `start..` of `run` into `out[..][start stride..]`
-        /// (`STRIDED`: gathered `stride` apart, else contiguous).
-        #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx2")]
-        #[inline]
-        unsafe fn $group<const V: usize, const STRIDED: bool>(
-            taps: &ClassTaps<$t>,
-            u: [&[$t]; 3],
-            run: Run,
-            start: usize,
-            out: [&mut [$t]; 3],
-        ) {
-            use std::arch::x86_64::{$add, $load, $mul, $set1, $store, $vec, $zero};
-            let (p, stride) = (run.from + start * run.stride, run.stride);
-            // The span of one register's nodes in `u`.
-            let span = if STRIDED { stride * ($w - 1) + 1 } else { $w * V };
-            let mut acc: [[$vec; 3]; V] = [[$zero(); 3]; V];
-            macro_rules! group {
-                ($taps:expr, $pattern:expr) => {
-                    for t in $taps {
-                        let q = p.wrapping_add_signed(t.delta);
-                        // One tap's neighbours of the group: bounds-checked once as slices.
-                        let (x, y, z) = (&u[0][q..q + span], &u[1][q..q + span], &u[2][q..q + span]);
-                        let b = &t.block;
-                        macro_rules! m {
-                            ($i:expr, $v:expr) => {
-                                $mul($set1(b[$i]), $v)
-                            };
-                        }
-                        macro_rules! a {
-                            ($p:expr, $q:expr) => {
-                                $add($p, $q)
-                            };
-                        }
-                        for (w, acc) in acc.iter_mut().enumerate() {
-                            // SAFETY: contiguous, each slice holds W V values and `W w + W <= W
-                            // V`; strided (V = 1), the W values `stride` apart end at the last.
-                            let (x, y, z) = unsafe {
-                                if STRIDED {
-                                    ($gather(x.as_ptr(), stride), $gather(y.as_ptr(), stride), $gather(z.as_ptr(), stride))
-                                } else {
-                                    (
-                                        $load(x.as_ptr().add($w * w)),
-                                        $load(y.as_ptr().add($w * w)),
-                                        $load(z.as_ptr().add($w * w)),
-                                    )
-                                }
-                            };
-                            let rows = pattern_rows!($pattern, x, y, z, m, a);
-                            for (a, r) in acc.iter_mut().zip(rows) {
-                                *a = $add(*a, r);
-                            }
-                        }
-                    }
-                };
-            }
-            by_pattern!(taps, group);
-            for (c, o) in out.into_iter().enumerate() {
-                if STRIDED {
-                    let mut lanes = [<$t>::default(); $w];
-                    // SAFETY: `lanes` holds W values.
-                    unsafe { $store(lanes.as_mut_ptr(), acc[0][c]) };
-                    for (l, v) in lanes.into_iter().enumerate() {
-                        o[(start + l) * stride] = v;
-                    }
-                } else {
-                    let d = &mut o[start..start + $w * V];
-                    for (w, acc) in acc.iter().enumerate() {
-                        // SAFETY: `d` holds exactly W V values, just checked, and `W w + W <= W V`.
-                        unsafe { $store(d.as_mut_ptr().add($w * w), acc[c]) };
-                    }
-                }
-            }
-        }
-    };
-}
-
-/// `W = 4` values `stride` apart from `p`.
+use run::run_scalar;
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
-unsafe fn gather_f64(p: *const f64, stride: usize) -> std::arch::x86_64::__m256d {
-    use std::arch::x86_64::{_mm_setr_epi32, _mm256_i32gather_pd};
-    let s = stride as i32;
-    // SAFETY: the caller's values are in one slice (its bounds checked).
-    unsafe { _mm256_i32gather_pd::<8>(p, _mm_setr_epi32(0, s, 2 * s, 3 * s)) }
-}
-
-/// `W = 8` values `stride` apart from `p`.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
-unsafe fn gather_f32(p: *const f32, stride: usize) -> std::arch::x86_64::__m256 {
-    use std::arch::x86_64::{_mm256_i32gather_ps, _mm256_setr_epi32};
-    let s = stride as i32;
-    // SAFETY: the caller's values are in one slice (its bounds checked).
-    unsafe { _mm256_i32gather_ps::<4>(p, _mm256_setr_epi32(0, s, 2 * s, 3 * s, 4 * s, 5 * s, 6 * s, 7 * s)) }
-}
-
-simd_run!(
-    row_avx2_f64,
-    group_avx2_f64,
-    gather_f64,
-    f64,
-    4,
-    __m256d,
-    _mm256_setzero_pd,
-    _mm256_set1_pd,
-    _mm256_loadu_pd,
-    _mm256_storeu_pd,
-    _mm256_mul_pd,
-    _mm256_add_pd
-);
-simd_run!(
-    row_avx2_f32,
-    group_avx2_f32,
-    gather_f32,
-    f32,
-    8,
-    __m256,
-    _mm256_setzero_ps,
-    _mm256_set1_ps,
-    _mm256_loadu_ps,
-    _mm256_storeu_ps,
-    _mm256_mul_ps,
-    _mm256_add_ps
-);
+use run::{row_avx2_f32, row_avx2_f64};
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::mechanics::material::Material;
-
-    #[test]
-    fn the_stencil_is_the_element_loop() {
-        let material = Material::object_a();
-        for n in [2, 3, 5, 8] {
-            let grid = Grid::new(n).unwrap();
-            let fem = super::super::FemModel::new(grid, &material);
-            let stencil = Stencil::new(&grid, &fem.ke);
-            let u: Vec<f64> = (0..3 * grid.num_nodes()).map(|d| ((d * 7919) % 101) as f64 * 1e-5 - 5e-4).collect();
-            let (mut a, mut b) = (vec![0.0; u.len()], vec![0.0; u.len()]);
-            fem.apply_by_elements(&u, &mut a);
-            stencil.apply(&u, &mut b);
-            let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for (x, y) in a.iter().zip(&b) {
-                assert!((x - y).abs() <= 1e-12 * scale, "n = {n}: {x} vs {y}");
-            }
-        }
-    }
-
-    #[test]
-    fn component_wise_is_interleaved_bit_for_bit() {
-        let material = Material::object_b();
-        // Runs inside along x of 0, 1, 3, 4, 6, 8, 9, 11 and 14 nodes (the AVX2 path from 4, in
-        // groups of eight from 8, the last four overlapping from 6), and 16^3 split over the pool.
-        for n in [2, 3, 5, 6, 8, 10, 11, 13, 16] {
-            let grid = Grid::new(n).unwrap();
-            let fem = super::super::FemModel::new(grid, &material);
-            let stencil = Stencil::new(&grid, &fem.ke);
-            let nn = grid.num_nodes();
-            let u: Vec<f64> = (0..3 * nn).map(|d| ((d * 7919) % 101) as f64 * 1e-5 - 5e-4).collect();
-            let split: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|p| u[3 * p + c]).collect());
-            let mut interleaved = vec![0.0; 3 * nn];
-            stencil.apply_on(&u, &mut interleaved, false);
-            for parallel in [false, true] {
-                let mut out: [Vec<f64>; 3] = std::array::from_fn(|_| vec![f64::NAN; nn]);
-                stencil.apply_components_on(&split, &mut out, parallel);
-                for p in 0..nn {
-                    for c in 0..3 {
-                        assert_eq!(out[c][p].to_bits(), interleaved[3 * p + c].to_bits(), "n = {n}, node {p}, {c}");
-                    }
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn the_f32_product_is_its_scalar_rows_and_near_the_f64_one() {
-        let material = Material::object_b();
-        // Runs inside along x of 3, 6, 8, 9, 14, 16, 17 and 22 nodes (the AVX2 path from 8, in
-        // groups of sixteen from 16, the last eight overlapping), and 16^3 split over the pool.
-        for n in [5, 8, 10, 11, 16, 18, 19, 24] {
-            let grid = Grid::new(n).unwrap();
-            let fem = super::super::FemModel::new(grid, &material);
-            let stencil = Stencil::new(&grid, &fem.ke);
-            let nn = grid.num_nodes();
-            let u: [Vec<f64>; 3] =
-                std::array::from_fn(|c| (0..nn).map(|p| (((3 * p + c) * 7919) % 101) as f64 * 1e-5 - 5e-4).collect());
-            let u32: [Vec<f32>; 3] = std::array::from_fn(|c| u[c].iter().map(|&v| v as f32).collect());
-            let mut exact: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
-            stencil.apply_components_on(&u, &mut exact, false);
-            let scale = exact.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-            let load = |q: usize| [u32[0][q], u32[1][q], u32[2][q]];
-            for parallel in [false, true] {
-                let mut out: [Vec<f32>; 3] = std::array::from_fn(|_| vec![f32::NAN; nn]);
-                stencil.apply_components_on(&u32, &mut out, parallel);
-                for p in 0..nn {
-                    let (i, j, k) = (p % n, (p / n) % n, p / (n * n));
-                    let row = row_sum(&stencil.taps_f32[side(i, n) + 3 * side(j, n) + 9 * side(k, n)], p, load);
-                    for c in 0..3 {
-                        assert_eq!(out[c][p].to_bits(), row[c].to_bits(), "n = {n}, node {p}, {c}");
-                        let off = (f64::from(out[c][p]) - exact[c][p]).abs();
-                        assert!(off <= 1e-5 * scale, "n = {n}, node {p}, {c}: {off:e} of {scale:e}");
-                    }
-                }
-            }
-        }
-    }
-}
+mod tests;

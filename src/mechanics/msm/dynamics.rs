@@ -4,6 +4,16 @@
 //! method on that factor ([`crate::mechanics::newton_krylov`]). A held node
 //! ([`Dynamics::anchor`]) is carried inside the implicit steps' solves
 //! ([`crate::mechanics::anchor`]). No step allocates once the state is built.
+//!
+//! `symplectic`: symplectic Euler's step (f64 or f32); `lattice_step`: the implicit step's
+//! equation for Newton's method.
+
+mod lattice_step;
+
+mod symplectic;
+
+use lattice_step::LatticeStep;
+use symplectic::symplectic_step;
 
 use super::forces::{
     ForceScratch, TangentAssembler, accumulate_spring_forces, add_spring_forces, dispatch_avx2, dispatch_simd,
@@ -111,83 +121,6 @@ impl PrefactoredWork {
             out_nodes: nodes(),
             tangent,
         })
-    }
-}
-
-/// The lattice's implicit step's equation for [`NewtonKrylov`], on the reduced unknowns: the
-/// springs' tangent at the iterate (geometric parts clamped at zero), the rest factor as the
-/// preconditioner, both with the held node's anchor.
-struct LatticeStep<'a> {
-    model: &'a MsmModel,
-    dofs: &'a DofMap,
-    system: &'a mut SpdSystem,
-    anchored: &'a AnchoredSolve,
-    /// The held node's unknowns and what the anchor adds to their diagonal.
-    held: Option<Held>,
-    /// `m + c_s c` of each unknown.
-    mass: &'a [f64],
-    x0: &'a [Vec<f64>; 3],
-    f0: &'a [Vec<f64>; 3],
-    v: &'a [Vec<f64>; 3],
-    f_ext: &'a [Vec<f64>; 3],
-    /// The iterate's positions and forces.
-    x: &'a mut [Vec<f64>; 3],
-    f: &'a mut [Vec<f64>; 3],
-    p_nodes: &'a mut [Vec<f64>; 3],
-    out_nodes: &'a mut [Vec<f64>; 3],
-    scratch: &'a mut ForceScratch,
-    /// `k` (stiffness), `v_s`, `w_n`, `w_e` and the position's scale `d` of `y`.
-    scales: [f64; 5],
-}
-
-impl StepEquation for LatticeStep<'_> {
-    fn residual(&mut self, y: &[f64], r: &mut [f64]) {
-        let [_, v_scale, w_n, w_e, d_scale] = self.scales;
-        for (dof, &(u, _)) in self.dofs.map.iter().enumerate() {
-            if u != u32::MAX {
-                let (p, c) = (dof / 3, dof % 3);
-                self.x[c][p] = self.x0[c][p] + d_scale * y[u as usize];
-            }
-        }
-        for (f, f_ext) in self.f.iter_mut().zip(self.f_ext) {
-            f.copy_from_slice(f_ext);
-        }
-        add_spring_forces(self.model, self.x, self.f, self.scratch);
-        for (dof, &(u, _)) in self.dofs.map.iter().enumerate() {
-            if u != u32::MAX {
-                let (p, c, u) = (dof / 3, dof % 3, u as usize);
-                let m = self.model.masses[p];
-                r[u] = v_scale * m * self.v[c][p] + w_n * self.f0[c][p] + w_e * self.f[c][p] - self.mass[u] * y[u];
-            }
-        }
-        if let Some(held) = self.held {
-            held.add_to(y, -1.0, r);
-        }
-    }
-
-    fn product(&mut self, p: &[f64], out: &mut [f64]) {
-        let k_scale = self.scales[0];
-        for (dof, &(u, _)) in self.dofs.map.iter().enumerate() {
-            self.p_nodes[dof % 3][dof / 3] = if u == u32::MAX { 0.0 } else { p[u as usize] };
-        }
-        tangent_product(self.model, self.x, self.p_nodes, self.out_nodes, self.scratch);
-        for (dof, &(u, _)) in self.dofs.map.iter().enumerate() {
-            if u != u32::MAX {
-                let u = u as usize;
-                out[u] = k_scale * self.out_nodes[dof % 3][dof / 3] + self.mass[u] * p[u];
-            }
-        }
-        if let Some(held) = self.held {
-            held.add_to(p, 1.0, out);
-        }
-    }
-
-    fn precondition(&mut self, z: &mut [f64]) -> Result<(), SparseError> {
-        self.system.solve_in_place(z)?;
-        if self.held.is_some() {
-            self.anchored.correct(z);
-        }
-        Ok(())
     }
 }
 
@@ -494,54 +427,5 @@ impl Dynamics {
                 std::array::from_fn(|c| self.x[c][p] - r[c])
             })
             .collect()
-    }
-}
-
-/// The symplectic step with the springs' force in `f32` ([`SingleForce`]).
-#[inline(always)]
-fn symplectic_single<const FMA: bool>(model: &MsmModel, s: &mut Dynamics, dt: f64) {
-    let Some(single) = &mut s.single else { return };
-    let springs = single.compute::<FMA>(&s.x);
-    let n = s.free.len();
-    for c in 0..3 {
-        // Every slice cut to `n`: no bounds checks, so the loop vectorises.
-        let (x, v, f, fe) = (&mut s.x[c][..n], &mut s.v[c][..n], &springs[c][..n], &s.f_ext[c][..n]);
-        let (free, inv_mass, damping) = (&s.free[..n], &s.inv_mass[..n], &model.damping[..n]);
-        for p in 0..n {
-            advance(&mut x[p], &mut v[p], f64::from(f[p]) + fe[p], inv_mass[p], damping[p], free[p], dt);
-        }
-    }
-}
-
-#[inline(always)]
-fn symplectic_step_generic(model: &MsmModel, s: &mut Dynamics, dt: f64) {
-    for f in &mut s.f {
-        f.fill(0.0);
-    }
-    accumulate_spring_forces::<true>(model, &s.x, &mut s.f, &mut s.scratch);
-    for c in 0..3 {
-        let (x, v, f, fe) = (&mut s.x[c], &mut s.v[c], &s.f[c], &s.f_ext[c]);
-        for ((((((x, v), f), fe), free), inv_m), d) in
-            x.iter_mut().zip(v.iter_mut()).zip(f.iter()).zip(fe).zip(&s.free).zip(&s.inv_mass).zip(&model.damping)
-        {
-            advance(x, v, f + fe, *inv_m, *d, *free, dt);
-        }
-    }
-}
-
-/// A node component's symplectic Euler update under the total load `force` (springs plus
-/// external): `v = (v + dt / m (force - c v)) free`, `x += dt v`.
-#[inline(always)]
-fn advance(x: &mut f64, v: &mut f64, force: f64, inv_mass: f64, damping: f64, free: f64, dt: f64) {
-    let vn = (*v + dt * inv_mass * (force - damping * *v)) * free;
-    *v = vn;
-    *x += dt * vn;
-}
-
-fn symplectic_step(model: &MsmModel, s: &mut Dynamics, dt: f64) {
-    if s.single.is_some() {
-        dispatch_simd!(symplectic_single, (model: &MsmModel, s: &mut Dynamics, dt: f64));
-    } else {
-        dispatch_avx2!(symplectic_step_generic, symplectic_step_avx2, (model: &MsmModel, s: &mut Dynamics, dt: f64));
     }
 }

@@ -6,6 +6,8 @@
 //!
 //! The force loop runs family by family over contiguous node ranges (structure of arrays), which
 //! the compiler vectorises; it allocates nothing.
+//!
+//! `pair_loop`: one family's pair forces, in AVX2 or one by one.
 
 use super::model::{MsmModel, Spring};
 use super::reduction::DofMap;
@@ -128,88 +130,6 @@ pub(crate) fn accumulate_spring_forces<const FAST: bool>(
             }
         }
     }
-}
-
-/// One family's pair forces: `t = k (1 - l0 / l) d` for each pair's difference `d` (length `l`),
-/// from the pairs' ends `[xa, xb, ya, yb, za, zb]`. With AVX2, four pairs at a time with `1 / l`
-/// from the f32 reciprocal square root refined by two Newton steps in f64 (relative error under
-/// 1e-13, against a square root and a division whose latency held the loop), else one by one.
-/// For the explicit step only: a strain carries that error absolutely (1e-13 of a spring's rest
-/// length), which is far below any motion but not below a static answer's 1e-12 at a 1 N load.
-#[inline(always)]
-fn pair_loop(k: &[f64], l0: f64, ends: [&[f64]; 6], t: [&mut [f64]; 3]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
-            unsafe { pair_loop_avx2(k, l0, ends, t) };
-            return;
-        }
-    }
-    pair_loop_scalar(k, l0, ends, t, 0);
-}
-
-/// [`pair_loop`] one pair at a time from pair `from`.
-#[inline(always)]
-fn pair_loop_scalar(k: &[f64], l0: f64, ends: [&[f64]; 6], t: [&mut [f64]; 3], from: usize) {
-    let [xa, xb, ya, yb, za, zb] = ends;
-    let [tx, ty, tz] = t;
-    for p in from..k.len() {
-        let dx = xb[p] - xa[p];
-        let dy = yb[p] - ya[p];
-        let dz = zb[p] - za[p];
-        let l = (dx * dx + dy * dy + dz * dz).sqrt().max(f64::MIN_POSITIVE);
-        let c = k[p] - k[p] * l0 / l;
-        tx[p] = c * dx;
-        ty[p] = c * dy;
-        tz[p] = c * dz;
-    }
-}
-
-/// [`pair_loop`] four pairs at a time.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn pair_loop_avx2(k: &[f64], l0: f64, ends: [&[f64]; 6], t: [&mut [f64]; 3]) {
-    use std::arch::x86_64::{
-        _mm_rsqrt_ps, _mm256_add_pd, _mm256_cvtpd_ps, _mm256_cvtps_pd, _mm256_loadu_pd, _mm256_max_pd, _mm256_mul_pd,
-        _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd,
-    };
-    let len = k.len();
-    let [xa, xb, ya, yb, za, zb] = ends;
-    debug_assert!(ends.iter().all(|e| e.len() >= len) && t.iter().all(|e| e.len() >= len));
-    let [tx, ty, tz] = t;
-    let (half, three_halves, l0v) = (_mm256_set1_pd(0.5), _mm256_set1_pd(1.5), _mm256_set1_pd(l0));
-    // A floor on `l^2` that f32 still holds (nodes 1e-15 m apart), so `1 / l` stays finite.
-    let floor = _mm256_set1_pd(1e-30);
-    let mut p = 0;
-    while p + 4 <= len {
-        // SAFETY: `p + 4 <= len`, and every slice holds at least `len` values (asserted above,
-        // and by the callers' ranges).
-        unsafe {
-            macro_rules! load {
-                ($s:expr) => {
-                    _mm256_loadu_pd($s.as_ptr().add(p))
-                };
-            }
-            let dx = _mm256_sub_pd(load!(xb), load!(xa));
-            let dy = _mm256_sub_pd(load!(yb), load!(ya));
-            let dz = _mm256_sub_pd(load!(zb), load!(za));
-            let l2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
-            let l2 = _mm256_max_pd(l2, floor);
-            let mut y = _mm256_cvtps_pd(_mm_rsqrt_ps(_mm256_cvtpd_ps(l2)));
-            for _ in 0..2 {
-                let yy = _mm256_mul_pd(_mm256_mul_pd(half, l2), _mm256_mul_pd(y, y));
-                y = _mm256_mul_pd(y, _mm256_sub_pd(three_halves, yy));
-            }
-            let kv = load!(k);
-            let c = _mm256_sub_pd(kv, _mm256_mul_pd(_mm256_mul_pd(kv, l0v), y));
-            _mm256_storeu_pd(tx.as_mut_ptr().add(p), _mm256_mul_pd(c, dx));
-            _mm256_storeu_pd(ty.as_mut_ptr().add(p), _mm256_mul_pd(c, dy));
-            _mm256_storeu_pd(tz.as_mut_ptr().add(p), _mm256_mul_pd(c, dz));
-        }
-        p += 4;
-    }
-    pair_loop_scalar(k, l0, [xa, xb, ya, yb, za, zb], [tx, ty, tz], p);
 }
 
 #[inline(always)]
@@ -434,83 +354,9 @@ impl TangentAssembler {
     }
 }
 
+mod pair_loop;
+
+use pair_loop::{pair_loop, pair_loop_scalar};
+
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::mechanics::grid::Grid;
-    use crate::mechanics::msm::model::MsmParams;
-
-    /// A hex lattice with every family's stiffness distinct.
-    fn hex_model(grid: Grid) -> MsmModel {
-        let params = MsmParams {
-            k1: 40.0,
-            k2: 50.0,
-            k3: 60.0,
-            d: 0.0,
-            c12: Some(10.0),
-            c13: Some(11.0),
-            c23: Some(12.0),
-            b: Some(5.0),
-        };
-        MsmModel::new(grid, params, 1000.0).expect("model")
-    }
-
-    /// The explicit step's pair loop (reciprocal square root and Newton steps where AVX2 runs)
-    /// gives the exact loop's forces within 1e-12 of the largest, on a hex lattice at 9^3 (its
-    /// last pairs one by one) with every node moved off its rest position.
-    #[test]
-    fn the_fast_pair_loop_is_the_exact_one() {
-        let grid = Grid::new(9).expect("grid");
-        let model = hex_model(grid);
-        let nn = grid.num_nodes();
-        let x: [Vec<f64>; 3] =
-            std::array::from_fn(|c| (0..nn).map(|p| grid.position(p)[c] + 1e-3 * ((p * (c + 3)) % 7) as f64).collect());
-        let mut forces = [false, true].map(|fast| {
-            let mut f: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
-            let mut scratch = ForceScratch::new(&model);
-            if fast {
-                accumulate_spring_forces::<true>(&model, &x, &mut f, &mut scratch);
-            } else {
-                accumulate_spring_forces::<false>(&model, &x, &mut f, &mut scratch);
-            }
-            f
-        });
-        let [exact, fast] = std::mem::take(&mut forces);
-        let scale = exact.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
-        assert!(scale > 0.1, "{scale}");
-        for (e, f) in exact.iter().flatten().zip(fast.iter().flatten()) {
-            assert!((e - f).abs() <= 1e-12 * scale, "{e} vs {f}");
-        }
-    }
-
-    /// The matrix-free tangent product is the assembled tangent's, with every spring stretched,
-    /// compressed and turned (hex lattice at 5^3, no node held).
-    #[test]
-    fn the_tangent_product_is_the_assembled_tangents() {
-        let grid = Grid::new(5).expect("grid");
-        let model = hex_model(grid);
-        let nn = grid.num_nodes();
-        let x: [Vec<f64>; 3] = std::array::from_fn(|c| {
-            (0..nn).map(|p| 1.1 * grid.position(p)[c] + 4e-3 * ((p * (c + 3)) % 7) as f64 - 3e-3).collect()
-        });
-        let p: [Vec<f64>; 3] = std::array::from_fn(|c| (0..nn).map(|q| ((q * 3 + c) as f64 * 0.37).sin()).collect());
-        let mut out: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
-        tangent_product(&model, &x, &p, &mut out, &mut ForceScratch::new(&model));
-        let dofs = DofMap::free(&vec![false; nn]);
-        let mut tangent = TangentAssembler::new(&model, dofs).expect("pattern");
-        tangent.assemble(&model, &x, 1.0, 0.0, true, None);
-        let flat: Vec<f64> = (0..3 * nn).map(|i| p[i % 3][i / 3]).collect();
-        let mut want = vec![0.0; 3 * nn];
-        tangent.system.mul(&flat, &mut want);
-        let scale = want.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        assert!(scale > 1.0, "{scale}");
-        for i in 0..3 * nn {
-            assert!(
-                (out[i % 3][i / 3] - want[i]).abs() <= 1e-12 * scale,
-                "dof {i}: {} vs {}",
-                out[i % 3][i / 3],
-                want[i]
-            );
-        }
-    }
-}
+mod tests;

@@ -3,6 +3,8 @@
 //! Nodes carry equal lumped masses; springs follow `f = k (|l| - l0)` along the spring; every node
 //! feels the damping force `-d v`. [`model`] holds the parameters and springs, [`forces`] the force
 //! and tangent kernels, [`statics`] the exact equilibrium, [`dynamics`] the time integrators.
+//!
+//! [`reduction`]: the clamped cases' mirror-symmetric unknowns; [`single`]: the force in `f32`.
 
 pub mod dynamics;
 pub mod forces;

@@ -2,6 +2,8 @@
 //! Figs. 5 and 6 (average and standard deviation of fitness per generation, hybrid vs GA vs SA,
 //! over several seeds) for both objects, beside the paper's own figures, as a Markdown report
 //! with SVG plots and CSV/JSON data.
+//!
+//! [`plot`]: the report's figures.
 
 pub mod plot;
 
@@ -297,7 +299,7 @@ fn richer_lattices(
 /// The touch benchmark of every shipped tissue, of the same lattices calibrated on the paper's
 /// cases, and of the load-free stiffness fit: all scored on the validation set.
 fn touch_section(md: &mut String, material: &Material, grid: Grid, paper_trained: &[MsmParams]) -> anyhow::Result<()> {
-    use crate::validate::touch_score::{Reference, evaluate};
+    use crate::validate::touch::score::{Reference, evaluate};
     let reference = Reference::new(material, grid)?;
     let fem = crate::mechanics::fem::FemModel::new(grid, material);
     let ti = material.is_transversely_isotropic();

@@ -45,6 +45,8 @@
 //! Points and sizes are in metres and must lie near the cube (within one side of it). The blow-up
 //! guard stops the run with an error after [`crate::sim::MAX_RECOVERIES`] blow-ups in a row, and
 //! a symplectic integrator forced above its stability limit is refused before any step.
+//!
+//! `check`: the whole script checked before any work; `path`: the probe path's samples.
 
 use glam::DVec3;
 
@@ -67,7 +69,7 @@ use crate::sim::{Integrator, Model, Simulation, Tool};
 #[serde(deny_unknown_fields)]
 pub struct Script {
     /// `A` or `B`.
-    pub object: String,
+    pub object: crate::mechanics::object::Object,
     /// `hex` (the default tissue), `shear`, `axis`, `fem-linear` or `fem-corotational`.
     #[serde(default = "default_model")]
     pub model: Model,
@@ -306,8 +308,7 @@ fn tissue(script: &Script, grid: Grid, material: &Material) -> anyhow::Result<Bo
 
 /// Runs a script.
 pub fn run(script: &Script) -> anyhow::Result<Outcome> {
-    let material = Material::preset(&script.object)
-        .ok_or_else(|| anyhow::anyhow!("script: object must be A or B, got {:?}", script.object))?;
+    let material = script.object.material();
     check_script(script)?;
     let grid = Grid::new(script.nodes)?;
     let tissue = tissue(script, grid, &material)?;
