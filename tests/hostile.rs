@@ -239,3 +239,70 @@ fn a_closed_standard_output_is_an_error() {
         assert!(stderr(&o).contains("standard output"), "{args}: {}", stderr(&o));
     }
 }
+
+/// Presses the contact cannot resolve are refused before the first step, each with its reason:
+/// before, a 1 mm sphere read 0.21 N, then -0.11 N, then 0 N as it went deeper; a 15 mm sphere
+/// pressed past its radius pulled; a press into the clamped bottom read 0 N at every depth; a
+/// 0.1 m sphere fell back to the model's nodes under the name "surface".
+#[test]
+fn presses_the_contact_cannot_resolve_are_refused_with_their_reason() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = dir.path().join("o.json");
+    let press = |at: &str, dir: &str, r: f64, d: f64| {
+        format!(r#"{{"probe":{{"at":{at},"direction":{dir},"radius":{r},"depth":{d},"duration_s":0.01,"samples":1}}}}"#)
+    };
+    let top = "[0.05,0.05,0.1]";
+    let down = "[0,0,-1]";
+    for (name, action, why) in [
+        ("small", press(top, down, 0.001, 0.0005), "smaller than the material's surface grid resolves"),
+        ("wide", press(top, down, 0.1, 0.004), "wider than the contact can hold"),
+        ("window", press(top, down, 0.05, 0.02), "wider than the contact can hold"),
+        ("deep", press(top, down, 0.015, 0.016), "deeper than a probe of radius 15 mm can be pressed"),
+        ("inside", press("[0.05,0.05,0.09]", down, 0.015, 0.004), "inside the tissue"),
+        ("away", press(top, "[0,0,1]", 0.015, 0.004), "does not enter the tissue"),
+        ("above", press("[0.05,0.05,0.12]", down, 0.015, 0.004), "does not enter the tissue"),
+        ("clamped", press("[0.05,0.05,0.0]", "[0,0,1]", 0.015, 0.004), "clamped face"),
+        (
+            "path",
+            r#"{"probe_path":{"radius":0.015,"direction":[0,0,-1],"sample_hz":100,"keys":[
+                {"t":0,"at":[0.05,0.05,0.1],"depth":0},{"t":0.1,"at":[0.05,0.05,0.1],"depth":0.02}]}}"#
+                .to_owned(),
+            "keys[1]: depth 20 mm is deeper",
+        ),
+    ] {
+        let p = write(dir.path(), &format!("{name}.json"), &script(&action, ""));
+        refused(&["simulate", "--script", s(&p), "--out", s(&o)], why, 2.0);
+    }
+    assert!(!o.exists());
+}
+
+/// A probe never pulls, and every sample says which contact produced its force: pressed to 3/4
+/// of its radius on the top face (the material's surface compliance) and on a side face (the
+/// model's nodes, off the compliance's face).
+#[test]
+fn a_probe_never_pulls_and_each_force_says_its_contact() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = dir.path().join("o.json");
+    let path = |at: &str, dir: &str| {
+        format!(
+            r#"{{"probe_path":{{"radius":0.015,"direction":{dir},"sample_hz":200,"keys":[
+                {{"t":0,"at":{at},"depth":0}},{{"t":0.3,"at":{at},"depth":0.01125}},{{"t":0.5,"at":{at},"depth":0.01125}}]}}}}"#
+        )
+    };
+    let actions =
+        format!("{},{{\"release\":{{}}}},{}", path("[0.05,0.05,0.1]", "[0,0,-1]"), path("[0.0,0.05,0.05]", "[1,0,0]"));
+    let p = write(dir.path(), "p.json", &script(&actions, r#","dt":1e-3"#));
+    let r = run(&["simulate", "--script", s(&p), "--out", s(&o)]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&o).expect("read")).expect("json");
+    let samples = v["force_path"].as_array().expect("force_path");
+    assert!(samples.len() > 150);
+    for sample in samples {
+        let f = sample["force_n"].as_f64().expect("force");
+        assert!(f >= 0.0, "a probe pulled: {sample}");
+        let side = sample["action"] == 2;
+        assert_eq!(sample["contact"], if side { "nodes" } else { "surface" }, "{sample}");
+    }
+    let deepest = samples.iter().filter(|s| s["action"] == 0).map(|s| s["force_n"].as_f64().unwrap_or(0.0));
+    assert!(deepest.fold(0.0, f64::max) > 20.0, "the press at 3/4 of the radius pushes back");
+}

@@ -2,10 +2,14 @@
 //! and slide the probe (palpation). Gestures turn into [`Request`]s; nothing here talks to the
 //! physics thread.
 //!
-//! The probe: the left button touches the surface under the cursor; moving down pushes the sphere
-//! in along the view ray (0.1 mm per pixel), the wheel too (0.25 mm a notch); with Shift held the
-//! touch point follows the cursor across the surface at the depth reached (in the plane through
-//! the first touch, across the push direction): pressing, holding and sliding, as a hand palpates.
+//! The probe: the left button touches the surface under the cursor, where the sphere starts
+//! tangent to the undeformed surface ([`crate::sim::press::centre`]); moving down pushes it in
+//! along the inward normal there (or along the view ray, where the panel says so), 0.1 mm per
+//! pixel, the wheel too (0.25 mm a notch), at most as deep as its contact resolves
+//! ([`crate::sim::press::max_depth`]); with Shift held the touch point follows the cursor across
+//! the surface at the depth reached (in the plane through the first touch, across the push
+//! direction): pressing, holding and sliding, as a hand palpates. The clamped bottom is not
+//! pressed.
 
 use glam::Vec3;
 
@@ -57,6 +61,21 @@ pub struct Scene<'a> {
     pub tool: ToolKind,
     /// Probe radius, mm.
     pub probe_radius_mm: f64,
+    /// Push the probe along the view ray (else along the inward normal at the touch).
+    pub probe_along_view: bool,
+}
+
+/// The probe's first touch at `hit` (the view ray `ray`, the pointer at height `y`): on the
+/// undeformed surface nearest it, pushed along its inward normal there (or the view ray); none on
+/// the clamped bottom, where the support, not the material, would push back.
+fn probe_start(hit: Vec3, ray: Vec3, y: f32, scene: &Scene<'_>, requests: &mut Vec<Request>) -> Gesture {
+    let (at, n) = crate::sim::press::touch(hit.as_dvec3().to_array());
+    if n.z < -0.5 {
+        return Gesture::None;
+    }
+    requests.push(Request::ProbeStarted);
+    let dir = if scene.probe_along_view { ray } else { -n.as_vec3() };
+    Gesture::Probe { contact: glam::DVec3::from(at).as_vec3(), dir, last_y: y, depth: 0.0 }
 }
 
 /// Handles the pointer on the 3D view (`response`), moving `camera` and pushing tool requests.
@@ -74,9 +93,10 @@ pub fn view_input(
         [2.0 * (p.x - rect.left()) / rect.width() - 1.0, 1.0 - 2.0 * (p.y - rect.top()) / rect.height()]
     };
     let scroll = ctx.input(|i| i.smooth_scroll_delta.y);
+    let deepest = crate::sim::press::max_depth(scene.probe_radius_mm * 1e-3) as f32;
     if let Gesture::Probe { depth, .. } = gesture {
         // While probing the wheel sets the depth: 0.25 mm a notch (50 points).
-        *depth = (*depth + scroll / 50.0 * 2.5e-4).clamp(0.0, MAX_REACH_M);
+        *depth = (*depth + scroll / 50.0 * 2.5e-4).clamp(0.0, deepest);
     } else if response.hovered() && scroll != 0.0 {
         camera.zoom(scroll / 50.0);
     }
@@ -89,16 +109,16 @@ pub fn view_input(
     }
     if response.drag_started_by(egui::PointerButton::Primary)
         && scene.tool != ToolKind::Orbit
-        && let Some(pos) = response.interact_pointer_pos()
+        && let Some(now) = response.interact_pointer_pos()
     {
+        // Where the button went down (a drag starts a few pixels later): the touch, and the
+        // height the indentation counts from, so that it follows the mouse from the press.
+        let pos = ctx.input(|i| i.pointer.press_origin()).unwrap_or(now);
         let (o, d) = camera.ray(ndc(pos), aspect);
         if let Some((hit, node)) = scene.mesh.pick(o.to_array(), d.to_array()) {
             *gesture = match scene.tool {
                 ToolKind::Drag => Gesture::Drag { node, plane_point: Vec3::from(scene.positions[node]) },
-                ToolKind::Probe => {
-                    requests.push(Request::ProbeStarted);
-                    Gesture::Probe { contact: Vec3::from(hit), dir: d, last_y: pos.y, depth: 0.0 }
-                }
+                ToolKind::Probe => probe_start(Vec3::from(hit), d, pos.y, scene, requests),
                 ToolKind::Orbit => Gesture::None,
             };
         }
@@ -121,7 +141,6 @@ pub fn view_input(
                 }
             }
             Gesture::Probe { mut contact, dir, last_y, mut depth } => {
-                let r = (scene.probe_radius_mm * 1e-3) as f32;
                 if ctx.input(|i| i.modifiers.shift) {
                     // Slide: the touch point under the cursor, in the plane through the touch
                     // across the push direction, within reach of the cube.
@@ -129,20 +148,22 @@ pub fn view_input(
                     let denom = d.dot(dir);
                     if denom.abs() > 1e-6 {
                         let t = (contact - o).dot(dir) / denom;
-                        let centre = Vec3::splat(0.05);
-                        contact = centre + (o + t * d - centre).clamp_length_max(0.1);
+                        let side = crate::mechanics::grid::CUBE_SIDE_M as f32;
+                        contact = (o + t * d).clamp(Vec3::ZERO, Vec3::splat(side));
                     }
                 } else {
-                    // 0.1 mm of indentation per pixel dragged downwards, at most half the side.
-                    depth = (depth + (pos.y - last_y) * 1e-4).clamp(0.0, MAX_REACH_M);
+                    // 0.1 mm of indentation per pixel dragged downwards, as deep as the contact
+                    // resolves.
+                    depth = (depth + (pos.y - last_y) * 1e-4).clamp(0.0, deepest);
                 }
                 *gesture = Gesture::Probe { contact, dir, last_y: pos.y, depth };
-                let centre = contact - r * dir + depth * dir;
-                requests
-                    .push(Request::Tool(Tool::Probe { centre: centre.as_dvec3().to_array(), radius: f64::from(r) }));
-                let f = scene.tool_force;
-                let along = -(f[0] * f64::from(dir.x) + f[1] * f64::from(dir.y) + f[2] * f64::from(dir.z));
-                requests.push(Request::ForceSample([f64::from(depth) * 1e3, along.max(0.0)]));
+                let radius = scene.probe_radius_mm * 1e-3;
+                let centre =
+                    crate::sim::press::centre(contact.as_dvec3().to_array(), dir.as_dvec3(), radius, f64::from(depth));
+                requests.push(Request::Tool(Tool::Probe { centre, radius }));
+                // The force shown: the tissue's push on the sphere, the same number everywhere.
+                let force = glam::DVec3::from(scene.tool_force).length();
+                requests.push(Request::ForceSample([f64::from(depth) * 1e3, force]));
             }
             _ => {}
         }

@@ -42,6 +42,8 @@ pub struct ViewSettings {
     pub tool: ToolKind,
     /// Probe radius, mm.
     pub probe_radius_mm: f64,
+    /// Push the probe along the view ray (else along the inward normal where it touches).
+    pub probe_along_view: bool,
     /// Colour map.
     pub colour: ColourMode,
     /// Overlays.
@@ -77,6 +79,7 @@ impl Default for ViewSettings {
             material_path: String::new(),
             tool: ToolKind::Drag,
             probe_radius_mm: 15.0,
+            probe_along_view: false,
             colour: ColourMode::Displacement,
             show_springs: false,
             show_nodes: false,

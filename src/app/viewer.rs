@@ -170,6 +170,7 @@ impl App {
                     tool_force: self.latest.tool_force,
                     tool: settings.tool,
                     probe_radius_mm: settings.probe_radius_mm,
+                    probe_along_view: settings.probe_along_view,
                 };
                 view_input(&response, ui.ctx(), &mut self.camera, &mut self.gesture, &scene, &mut self.requests);
                 if settings.colour != ColourMode::None {

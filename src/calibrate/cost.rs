@@ -38,6 +38,10 @@ pub enum CostError {
     /// The local polish failed.
     #[error("polish: {0}")]
     Polish(String),
+    /// The settings cannot inform the cost: it would not depend on the parameters, or would not
+    /// be the cost the result names ([`super::check_cases`], [`super::check_setup`]).
+    #[error("{0}")]
+    Uninformative(String),
 }
 
 /// The clamped benchmark of one object: FEM references and what the cost needs of them.
@@ -175,23 +179,15 @@ impl Problem {
     }
 
     /// This problem using `set` as its training cases (the touch benchmark's FEM answers are
-    /// computed here when it needs them).
+    /// computed here when it needs them). A set that cannot inform the static cost on this lattice
+    /// and grid is refused first, before any reference is computed ([`super::check_cases`]).
     pub fn with_cases(mut self, set: super::CaseSet) -> Result<Self, CostError> {
+        super::check_cases(set, self.topology, self.grid)?;
         if set == super::CaseSet::Presses {
-            if self.topology == Topology::Axis {
-                return Err(CostError::Touch(
-                    "the axis-spring lattice has no shear stiffness at rest, so the presses cannot train it".into(),
-                ));
-            }
             let forces = crate::validate::probe::score::training_forces(&self.material)
                 .map_err(|e| CostError::Touch(format!("the material's presses: {e:#}")))?;
             self.presses = Some(std::sync::Arc::new(forces));
         } else if set != super::CaseSet::Paper {
-            if self.topology == Topology::Axis {
-                return Err(CostError::Touch(
-                    "the axis-spring lattice has no shear stiffness at rest, so the touch cases cannot train it".into(),
-                ));
-            }
             let reference = crate::validate::touch::score::Reference::new(&self.material, self.grid)
                 .map_err(|e| CostError::Touch(format!("{e:#}")))?;
             self.touch = Some(std::sync::Arc::new(reference));

@@ -13,6 +13,10 @@
 //! in the benchmark (the smallest over the three clamped faces, in the mirror-symmetric subspace
 //! the benchmark's loads excite; see [`critical`]).
 //!
+//! Settings that cannot inform the cost (a case set the cost mode cannot use, a grid on which no
+//! training press touches a node) are refused before any work ([`check_setup`]), and the polish
+//! stays inside the search box the result reports ([`PolishReport::at_bound`]).
+//!
 //! [`search`]: GA, SA and the hybrid; [`genes`]: the chromosome and its bounds; [`cost`]: eq. 1 and
 //! the touch and press costs; [`transient`]: the transient cost that identifies `d`.
 
@@ -31,6 +35,7 @@ pub use crate::sim::shipped::CaseSet;
 pub use cost::{CostError, Problem, Workspace};
 pub use genes::GeneSpace;
 
+use crate::mechanics::grid::Grid;
 use crate::mechanics::msm::{MsmParams, Topology};
 
 /// The search method.
@@ -80,8 +85,11 @@ pub struct PolishReport {
     pub cost: f64,
     /// L-BFGS iterations.
     pub iterations: u64,
-    /// Genes that the polish moved outside the search box (the box did not hold the optimum).
-    pub left_box: Vec<String>,
+    /// The stiffness genes that end on a bound of the search box, as `NAME=lo` or `NAME=hi`. The
+    /// polish stays inside the box ([`polish::polish_within`]), so a bound listed here binds: the
+    /// box may not hold the optimum (widen it with `--bound`).
+    #[serde(default)]
+    pub at_bound: Vec<String>,
 }
 
 /// Largest `population x generations` of one run (the paper's is 5000).
@@ -240,7 +248,7 @@ fn search_and_polish(
         let ti = problem.material.is_transversely_isotropic();
         let mut ws = Workspace::default();
         let mut objective = |p: &MsmParams| problem.objective_gradient(p, &mut ws).map_err(|e| e.to_string());
-        let p = polish::polish(&params, ti, &mut objective).map_err(CostError::Polish)?;
+        let p = polish::polish_within(&params, ti, &polish_box(space), &mut objective).map_err(CostError::Polish)?;
         if p.cost < outcome.best_cost {
             params = p.params;
             outcome.best_cost = p.cost;
@@ -249,22 +257,45 @@ fn search_and_polish(
             start_cost: p.start_cost,
             cost: p.cost,
             iterations: p.iterations,
-            left_box: left_box(space, &params),
+            at_bound: at_bound(space, &params),
         });
     }
     Ok((params, outcome, polish))
 }
 
-/// The stiffness genes of `params` that lie outside `space`'s box (`d` is not a stiffness).
-fn left_box(space: &GeneSpace, params: &MsmParams) -> Vec<String> {
+/// The box of each stiffness group ([`crate::response::linear::GROUP_NAMES`]) in `space`; a
+/// group without a gene (a tied copy, or one the lattice lacks) gets the whole stiffness range.
+fn polish_box(space: &GeneSpace) -> [(f64, f64); 7] {
+    std::array::from_fn(|g| {
+        let name = crate::response::linear::GROUP_NAMES[g];
+        space
+            .names
+            .iter()
+            .position(|n| n == name)
+            .map_or(crate::mechanics::msm::model::STIFFNESS_RANGE, |i| (space.lo[i], space.hi[i]))
+    })
+}
+
+/// The stiffness genes of `params` on a bound of `space`'s box (within [`polish::ON_BOUND`] in
+/// `ln k`; a bound is taken within the stiffness range, as the polish takes it), as `NAME=lo` or
+/// `NAME=hi` (`d` is not a stiffness).
+fn at_bound(space: &GeneSpace, params: &MsmParams) -> Vec<String> {
     let theta = crate::response::linear::group_values(params);
+    let bounds = polish_box(space);
     space
         .names
         .iter()
-        .zip(space.lo.iter().zip(&space.hi))
-        .filter_map(|(name, (&lo, &hi))| {
+        .filter_map(|name| {
             let g = crate::response::linear::GROUP_NAMES.iter().position(|n| n == name)?;
-            (theta[g] < lo || theta[g] > hi).then(|| name.clone())
+            let (lo, hi) = polish::effective_bounds(bounds[g]);
+            let v = theta[g].ln();
+            if v - lo.ln() <= polish::ON_BOUND {
+                Some(format!("{name}=lo"))
+            } else if hi.ln() - v <= polish::ON_BOUND {
+                Some(format!("{name}=hi"))
+            } else {
+                None
+            }
         })
         .collect()
 }
@@ -280,8 +311,71 @@ pub enum CalibrationError {
     Cost(#[from] CostError),
 }
 
+/// Refuses training cases that cannot inform the static cost of `topology` on `grid`, before
+/// any reference is computed: the touch cases and the presses on the axis-spring lattice (it has
+/// no shear stiffness at rest), and the presses on a grid where no training press touches a node
+/// (every press force is then zero whatever the parameters, and the cost is 1).
+pub fn check_cases(set: CaseSet, topology: Topology, grid: Grid) -> Result<(), CostError> {
+    if set != CaseSet::Paper && topology == Topology::Axis {
+        let what = if set == CaseSet::Presses { "the presses" } else { "the touch cases" };
+        return Err(CostError::Touch(format!(
+            "the axis-spring lattice has no shear stiffness at rest, so {what} cannot train it"
+        )));
+    }
+    if set == CaseSet::Presses && touching_presses(grid) == 0 {
+        let n = grid.n();
+        let finer = (n + 1..=crate::mechanics::grid::MAX_NODES_PER_AXIS)
+            .find(|&m| Grid::new(m).is_ok_and(|g| touching_presses(g) > 0))
+            .map_or_else(String::new, |m| format!("; use a finer grid, e.g. --nodes {m}"));
+        return Err(CostError::Uninformative(format!(
+            "no training press touches a node of the {n}^3 grid (each sphere passes between the nodes), so the \
+             press cost cannot depend on the parameters{finer}"
+        )));
+    }
+    Ok(())
+}
+
+/// How many of the training presses ([`crate::validate::probe::presses`]) touch a node of
+/// `grid`: a free surface node inside the sphere at rest, which is what starts the node contact
+/// of [`crate::response::linear::SceneSolver::probe`]. A press that touches none has no contact
+/// and no force, whatever the stiffness.
+pub fn touching_presses(grid: Grid) -> usize {
+    let fixed = crate::response::linear::scene_fixed_dofs(&grid);
+    crate::validate::probe::presses::press_cases()
+        .iter()
+        .filter(|c| c.set == crate::validate::touch::Set::Training)
+        .filter(|c| {
+            let geometry = crate::response::linear::sphere_geometry(&grid, c.press.centre(), c.press.radius);
+            (0..grid.num_nodes()).any(|p| !fixed[3 * p] && grid.on_boundary(p) && geometry[p].1 > 0.0)
+        })
+        .count()
+}
+
+/// Refuses, before any work, a calibration whose cost its settings cannot inform: the training
+/// cases of [`check_cases`]; the transient cost with training cases other than the paper's (it
+/// integrates only the nine clamped face loads, so it would train on those and name others); and
+/// the load-free stiffness fit with the transient cost (it identifies no damping).
+pub fn check_setup(settings: &Settings, cases: CaseSet, topology: Topology, grid: Grid) -> Result<(), CostError> {
+    if settings.cost == CostMode::Transient && cases != CaseSet::Paper {
+        return Err(CostError::Uninformative(format!(
+            "--cost transient cannot use --cases {}: the transient cost integrates only the paper's nine clamped \
+             face loads (use --cases paper, or --cost static)",
+            cases.name()
+        )));
+    }
+    if settings.cost == CostMode::Transient && settings.method == Method::StiffnessFit {
+        return Err(CostError::Uninformative(
+            "--method stiffness-fit cannot use --cost transient: the fit is load-free and identifies no damping \
+             (use --cost static, or a search method)"
+                .into(),
+        ));
+    }
+    check_cases(cases, topology, grid)
+}
+
 /// Runs a calibration of `problem` within `space`. `on_generation` is called once per generation
-/// on the calling thread; setting `cancel` stops the run within one generation.
+/// on the calling thread; setting `cancel` stops the run within one generation. Settings the cost
+/// cannot use are refused before the search ([`check_setup`]).
 pub fn calibrate(
     problem: &Problem,
     space: &GeneSpace,
@@ -290,6 +384,7 @@ pub fn calibrate(
     on_generation: &mut dyn FnMut(&GenerationStats),
 ) -> Result<CalibrationResult, CalibrationError> {
     settings.validate().map_err(CalibrationError::Settings)?;
+    check_setup(settings, problem.case_set, problem.topology, problem.grid)?;
     let start = Instant::now();
     let (mut params, outcome, polish) = match settings.method {
         Method::StiffnessFit => {

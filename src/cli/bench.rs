@@ -21,10 +21,11 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     if args.gpu {
         let gpu = crate::gpu::ComputeDevice::open()?;
         let material = crate::mechanics::material::Material::object_a();
+        let mut said = crate::sim::surface_probe::stderr_report();
         let surface = crate::sim::surface_probe::MaterialSurface::load_or_compute(
             &material,
             crate::io::cache_dir().as_deref(),
-            &mut |_| true,
+            &mut |e| said.event(e),
         )?;
         let report = crate::study::bench::gpu::measure(&gpu, &surface)?;
         return if args.json { say(&serde_json::to_string_pretty(&report)?) } else { say_raw(&report.to_text()) };

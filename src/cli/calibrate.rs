@@ -35,13 +35,15 @@ pub struct CalibrateArgs {
     /// Crossover probability per selected pair.
     #[arg(long, default_value_t = 0.8, allow_hyphen_values = true)]
     pub crossover: f64,
-    /// Cost: static equilibria (the paper's).
+    /// Cost: static equilibria (the paper's), or the state 20 ms after a step load, which identifies
+    /// damping (on the paper's cases only).
     #[arg(long, value_enum, default_value = "static")]
     pub cost: CostMode,
     /// MSM topology: the paper's axis springs, axis + face-diagonal (shear) springs, or the hex-element lattice.
     #[arg(long, value_enum, default_value = "axis")]
     pub model: Topology,
-    /// Training cases: the paper's nine face loads, the touch benchmark's training set, or both.
+    /// Training cases: the paper's nine face loads, the touch benchmark's training set, both, or
+    /// the material's training presses (refused on a grid where no press touches a node).
     #[arg(long, value_enum, default_value = "paper")]
     pub cases: CaseSet,
     /// Override a gene's search bounds, e.g. `--bound k1=100:5000` (repeatable).
@@ -90,6 +92,8 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
         space.set_bound(name.trim(), lo, hi).map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
     }
     crate::mechanics::msm::statics::check_grid(model, grid.n()).map_err(anyhow::Error::msg)?;
+    // Settings the cost cannot use are refused here, before any reference is computed.
+    crate::calibrate::check_setup(&settings, cases, model, grid)?;
     let name = material.name.clone();
     let problem = Problem::new(material, grid, model)
         .and_then(|p| p.with_cases(cases))

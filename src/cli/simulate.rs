@@ -10,7 +10,9 @@ use crate::io::read_json;
 /// The flags of `simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// The script (JSON), see README.
+    /// The script (JSON), see README. Presses the contact can resolve: probe radius 5 to 50 mm,
+    /// depth at most 3/4 of the radius, starting on or outside the tissue's surface, moving into
+    /// it, not into a clamped face.
     #[arg(long)]
     pub script: PathBuf,
     /// Output JSON file.

@@ -122,10 +122,9 @@ fn against_material(
     let (mut own, _) = touch_score::responder(fem, None, material, grid)?;
     let start = std::time::Instant::now();
     let mut model_force: Box<dyn FnMut(&continuum::Press) -> anyhow::Result<f64>> = if contact == "surface" {
-        let compliance = crate::sim::surface_probe::load_or_compute(material, dir.as_deref(), &mut |f| {
-            eprintln!("the material's surface compliance: {:.0} %, {:.0} s", 100.0 * f, start.elapsed().as_secs_f64());
-            true
-        })?;
+        let mut report = crate::sim::surface_probe::stderr_report();
+        let compliance =
+            crate::sim::surface_probe::load_or_compute(material, dir.as_deref(), &mut |e| report.event(e))?;
         let mut scratch = crate::response::surface_compliance::ContactScratch::default();
         Box::new(move |press| probe_score::compliance_force_n(&compliance, &mut scratch, press))
     } else {

@@ -1,7 +1,9 @@
 //! Layer 0, files and numbers: bounded reading ([`read`]), atomic writing and output folders
-//! ([`write`](mod@write)), temporary outputs removed on a signal ([`pending`]), and numbers and messages as
-//! the user reads them ([`message`]). May use nothing else of the crate.
+//! ([`write`](mod@write)), temporary outputs removed on a signal ([`pending`]), the cache folder's
+//! files checked before they are opened and before any work ([`cache`]), and numbers and messages
+//! as the user reads them ([`message`]). May use nothing else of the crate.
 
+pub mod cache;
 pub mod message;
 pub mod pending;
 pub mod read;

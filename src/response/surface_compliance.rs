@@ -19,6 +19,9 @@ use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::mechanics::material::Material;
 use crate::mechanics::sparse::SparseError;
 
+pub mod file;
+pub use file::{FILE_FORMAT, FILE_MAGIC, FileError, METHOD_VERSION};
+
 /// Divisions of the face per axis: 2 mm spacing.
 pub const DEFAULT_DIVISIONS: usize = 50;
 /// Depth of the fine layer under the face, metres; the mesh grows by [`GROWTH`] below it.
@@ -53,6 +56,9 @@ pub enum ComplianceError {
     /// More face nodes under the sphere than [`MAX_CONTACT_NODES`].
     #[error("the sphere covers {0} nodes of the face, above the bound of {MAX_CONTACT_NODES}")]
     TooLarge(usize),
+    /// The active set did not settle within its iterations.
+    #[error("the contact did not settle in {0} active-set iterations")]
+    NotSettled(usize),
     /// The contact compliance lost positive definiteness.
     #[error("the contact compliance is not positive definite")]
     NotPositiveDefinite,
@@ -68,6 +74,14 @@ impl SurfaceCompliance {
     /// Quadrant nodes per axis.
     fn half(&self) -> usize {
         self.divisions / 2 + 1
+    }
+
+    /// A compliance of `divisions` divisions per axis with every entry `value`, metres per newton
+    /// (for tests of what uses one).
+    #[cfg(test)]
+    pub(crate) fn uniform(divisions: usize, value: f32) -> Self {
+        let (side, half) = (divisions + 1, divisions / 2 + 1);
+        Self { divisions, columns: vec![value; half * half * 3 * side * side * 3] }
     }
 
     /// Face nodes per axis.
@@ -193,50 +207,31 @@ impl SurfaceCompliance {
         radius: f64,
         scratch: &mut ContactScratch,
     ) -> Result<[f64; 3], ComplianceError> {
-        let c = DVec3::from(centre);
-        // The window: face nodes within a spacing of the sphere's section through the face.
-        let side = self.side();
-        let s = self.spacing();
-        let reach = radius + s;
-        let lo = |x: f64| (((x - reach) / s).floor().max(0.0)) as usize;
-        let hi = |x: f64| (((x + reach) / s).ceil().max(0.0) as usize).min(side - 1);
         scratch.window.clear();
         scratch.active.clear();
         if centre[2] - radius >= CUBE_SIDE_M {
             return Ok([0.0; 3]);
         }
-        for j in lo(centre[1])..=hi(centre[1]) {
-            for i in lo(centre[0])..=hi(centre[0]) {
-                let q = i + side * j;
-                let d = DVec3::from(self.position(q)) - c;
-                let dist = d.length();
-                let gap = radius - dist;
-                if gap > -s {
-                    if scratch.window.len() == MAX_CONTACT_NODES {
-                        return Err(ComplianceError::TooLarge(MAX_CONTACT_NODES + 1));
-                    }
-                    let n = if dist > 1e-12 { d / dist } else { DVec3::NEG_Z };
-                    scratch.window.push((q, n.to_array(), gap));
-                }
+        let mut too_large = false;
+        for_window(self.divisions, centre, radius, |q, d| {
+            if scratch.window.len() == MAX_CONTACT_NODES {
+                too_large = true;
+                return false;
             }
+            let dist = d.length();
+            let n = if dist > 1e-12 { d / dist } else { DVec3::NEG_Z };
+            scratch.window.push((q, n.to_array(), radius - dist));
+            true
+        });
+        if too_large {
+            return Err(ComplianceError::TooLarge(window_count(self.divisions, centre, radius)));
         }
-        // Warm start: the face nodes in contact at the last solve, where it touched; else every
-        // node inside the sphere.
-        for (w, &(q, _, gap)) in scratch.window.iter().enumerate() {
-            if scratch.previous.binary_search(&q).is_ok() && gap > -self.spacing() {
-                scratch.active.push(w);
-            }
-        }
-        if scratch.active.is_empty() {
-            for (w, &(_, _, gap)) in scratch.window.iter().enumerate() {
-                if gap > 0.0 {
-                    scratch.active.push(w);
-                }
-            }
-        }
+        self.warm_start(scratch);
+        let mut settled = false;
         for _ in 0..MAX_CONTACT_ITERATIONS {
             let m = scratch.active.len();
             if m == 0 {
+                settled = true;
                 break;
             }
             self.solve_active(scratch)?;
@@ -260,9 +255,17 @@ impl SurfaceCompliance {
             }
             scratch.next.sort_unstable();
             if scratch.next == scratch.active {
+                settled = true;
                 break;
             }
             std::mem::swap(&mut scratch.next, &mut scratch.active);
+        }
+        if !settled {
+            // The forces solved last belong to the set before the swap: none of them is used.
+            scratch.active.clear();
+            scratch.lambda.clear();
+            scratch.previous.clear();
+            return Err(ComplianceError::NotSettled(MAX_CONTACT_ITERATIONS));
         }
         if scratch.active.is_empty() {
             scratch.lambda.clear();
@@ -277,6 +280,23 @@ impl SurfaceCompliance {
             force -= DVec3::from(scratch.window[w].1) * scratch.lambda[k];
         }
         Ok(force.to_array())
+    }
+
+    /// The first active set: the face nodes in contact at the last solve, where it touched; else
+    /// every node inside the sphere.
+    fn warm_start(&self, scratch: &mut ContactScratch) {
+        for (w, &(q, _, gap)) in scratch.window.iter().enumerate() {
+            if scratch.previous.binary_search(&q).is_ok() && gap > -self.spacing() {
+                scratch.active.push(w);
+            }
+        }
+        if scratch.active.is_empty() {
+            for (w, &(_, _, gap)) in scratch.window.iter().enumerate() {
+                if gap > 0.0 {
+                    scratch.active.push(w);
+                }
+            }
+        }
     }
 
     /// Normal displacement of face node `q` (normal `nq`) under the active contact forces.
@@ -339,38 +359,36 @@ impl SurfaceCompliance {
         );
         Ok(())
     }
+}
 
-    /// The compliance as bytes: a little-endian header (`divisions` as u64) and the f32 columns.
-    pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(8 + 4 * self.columns.len());
-        out.extend_from_slice(&(self.divisions as u64).to_le_bytes());
-        for v in &self.columns {
-            out.extend_from_slice(&v.to_le_bytes());
+/// Calls `f(node, node - centre)` for every face node (of a face with `divisions` divisions per
+/// axis) that a sphere's contact considers: within a face spacing of the sphere's surface; `f`
+/// returns `false` to stop. The one rule of the contact's window.
+fn for_window(divisions: usize, centre: [f64; 3], radius: f64, mut f: impl FnMut(usize, DVec3) -> bool) {
+    let side = divisions + 1;
+    let s = CUBE_SIDE_M / divisions as f64;
+    let reach = radius + s;
+    let lo = |x: f64| (((x - reach) / s).floor().max(0.0)) as usize;
+    let hi = |x: f64| (((x + reach) / s).ceil().max(0.0) as usize).min(side - 1);
+    let c = DVec3::from(centre);
+    for j in lo(centre[1])..=hi(centre[1]) {
+        for i in lo(centre[0])..=hi(centre[0]) {
+            let d = DVec3::new(i as f64 * s, j as f64 * s, CUBE_SIDE_M) - c;
+            if d.length() < radius + s && !f(i + side * j, d) {
+                return;
+            }
         }
-        out
     }
+}
 
-    /// Reads [`SurfaceCompliance::to_bytes`].
-    pub fn from_bytes(bytes: &[u8]) -> Result<Self, ComplianceError> {
-        let bad = |why: &str| ComplianceError::File(why.into());
-        let head: [u8; 8] = bytes.get(..8).and_then(|h| h.try_into().ok()).ok_or_else(|| bad("too short"))?;
-        let divisions = u64::from_le_bytes(head) as usize;
-        if !divisions.is_multiple_of(2) || !(2..=200).contains(&divisions) {
-            return Err(bad("bad divisions"));
-        }
-        let side = divisions + 1;
-        let half = divisions / 2 + 1;
-        let len = half * half * 3 * side * side * 3;
-        let body = &bytes[8..];
-        if body.len() != 4 * len {
-            return Err(bad("wrong length"));
-        }
-        let columns: Vec<f32> = body.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
-        if columns.iter().any(|v| !v.is_finite()) {
-            return Err(bad("not finite"));
-        }
-        Ok(Self { divisions, columns })
-    }
+/// How many face nodes a sphere's contact considers ([`SurfaceCompliance::press`]'s window).
+pub fn window_count(divisions: usize, centre: [f64; 3], radius: f64) -> usize {
+    let mut count = 0;
+    for_window(divisions, centre, radius, |_, _| {
+        count += 1;
+        true
+    });
+    count
 }
 
 /// Preallocated memory of [`SurfaceCompliance::press`].

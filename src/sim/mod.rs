@@ -28,6 +28,7 @@ pub mod integrator;
 pub mod modal_lag;
 pub mod model;
 pub mod msm_tissue;
+pub mod press;
 pub mod shipped;
 pub mod simulation;
 pub mod surface_probe;

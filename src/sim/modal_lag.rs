@@ -194,6 +194,31 @@ impl ModalLag {
         out
     }
 
+    /// The lag of the surface at the top-face point `(x, y)` behind its static answer at the end
+    /// of `span` seconds with the contact's modal forces held meanwhile, metres: each mode's
+    /// exact motion over the span ([`ModalLag::advance`]), so that a contact solved with it is
+    /// consistent with the state the modes reach (the step's modal response folded into the
+    /// contact: no energy exchanged that is not there). `span = 0` is [`ModalLag::lag`].
+    pub fn lag_after(&self, x: f64, y: f64, span: f64) -> [f64; 3] {
+        let corners = self.basis.corners(x, y);
+        let mut out = [0.0; 3];
+        for (k, shape) in self.basis.shape.iter().enumerate() {
+            let w = self.basis.omega[k];
+            let a = self.half_alpha;
+            let (e, c, s) = propagator(w, a, span);
+            // q(span) - F / w^2 from (q, q'), the force held: the free motion, less the static
+            // answer's part the mode has not reached.
+            let free = e * (self.q[k] * c + (self.qdot[k] + a * self.q[k]) * s);
+            let behind = free - e * (c + a * s) * self.force[k] / (w * w);
+            for &(t, wt) in &corners {
+                for c in 0..3 {
+                    out[c] += wt * shape[3 * t + c] * behind;
+                }
+            }
+        }
+        out
+    }
+
     /// Advances every coordinate by `dt` under the modal forces set (held over the step),
     /// exactly (under- or overdamped).
     pub fn advance(&mut self, dt: f64) {
@@ -202,25 +227,31 @@ impl ModalLag {
             let a = self.half_alpha;
             let qs = self.force[k] / (w * w);
             let (y, ydot) = (self.q[k] - qs, self.qdot[k]);
-            // y'' + 2 a y' + w^2 y = 0 from (y, y'): y = e^(-a t) (y cos + (y' + a y) sin(wd t) / wd),
-            // with cos and sin of an imaginary wd taken as cosh and sinh where overdamped.
-            let d = w * w - a * a;
-            let e = (-a * dt).exp();
-            let (c, s_over_wd) = if d > 1e-12 * w * w {
-                let wd = d.sqrt();
-                ((wd * dt).cos(), (wd * dt).sin() / wd)
-            } else if d < -1e-12 * w * w {
-                let g = (-d).sqrt();
-                ((g * dt).cosh(), (g * dt).sinh() / g)
-            } else {
-                (1.0, dt)
-            };
+            let (e, c, s_over_wd) = propagator(w, a, dt);
             let b = ydot + a * y;
             self.q[k] = qs + e * (y * c + b * s_over_wd);
             // y' = e^(-a t) (y' cos - (a y' + w^2 y) sin / wd).
             self.qdot[k] = e * (ydot * c - (a * ydot + w * w * y) * s_over_wd);
         }
     }
+}
+
+/// The free motion of `y'' + 2 a y' + w^2 y = 0` over `dt`: `(e^(-a dt), cos(wd dt), sin(wd dt) /
+/// wd)`, so that `y(dt) = e (y cos + (y' + a y) sin / wd)` and `y'(dt) = e (y' cos - (a y' + w^2
+/// y) sin / wd)`; cos and sin of an imaginary `wd` taken as cosh and sinh where overdamped.
+fn propagator(w: f64, a: f64, dt: f64) -> (f64, f64, f64) {
+    let d = w * w - a * a;
+    let e = (-a * dt).exp();
+    let (c, s_over_wd) = if d > 1e-12 * w * w {
+        let wd = d.sqrt();
+        ((wd * dt).cos(), (wd * dt).sin() / wd)
+    } else if d < -1e-12 * w * w {
+        let g = (-d).sqrt();
+        ((g * dt).cosh(), (g * dt).sinh() / g)
+    } else {
+        (1.0, dt)
+    };
+    (e, c, s_over_wd)
 }
 
 #[cfg(test)]

@@ -14,6 +14,8 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use crate::io::cache::{CacheEvent, KeptFile, StderrReport};
+
 use super::modal_lag::{ModalBasis, ModalLag};
 use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
@@ -45,6 +47,8 @@ pub struct SurfaceProbe {
     relaxation: f64,
     /// Simulated time since the contact was last solved, s.
     since_solve_s: f64,
+    /// The span the last solve's force is held over, s.
+    span: f64,
 }
 
 impl SurfaceProbe {
@@ -61,6 +65,7 @@ impl SurfaceProbe {
             delta: [0.0; 3],
             relaxation: 0.5,
             since_solve_s: 0.0,
+            span: 0.0,
         }
     }
 
@@ -112,11 +117,14 @@ impl SurfaceProbe {
         }
     }
 
-    /// The force of the tissue on the sphere (`centre`, `radius`), newtons, solved again only
-    /// when the sphere moved or, with the lag, when it was last solved a tick ([`super::TICK_S`],
-    /// the rate a haptic device reads the force) or more ago and the lag has moved since (its
-    /// loads held over the substeps of a tick). Allocates nothing.
-    pub fn update(&mut self, centre: [f64; 3], radius: f64) -> Result<[f64; 3], ComplianceError> {
+    /// The force of the tissue on the sphere (`centre`, `radius`), newtons, solved again when
+    /// the sphere moved, or with the lag when the time it was solved for has passed. With the
+    /// lag, the contact is solved against the lag the material's modes reach at the end of the
+    /// span its force is held over (the step `dt` while the sphere moves; a tick,
+    /// [`super::TICK_S`], the rate a haptic device reads the force, while it is held still), with
+    /// that force held ([`ModalLag::lag_after`]): the contact and the modes agree, so they
+    /// exchange no energy that is not there and a held press is steady. Allocates nothing.
+    pub fn update(&mut self, centre: [f64; 3], radius: f64, dt: f64) -> Result<[f64; 3], ComplianceError> {
         if self.lag.is_none() {
             if self.last == Some((centre, radius)) {
                 return Ok(self.force);
@@ -126,19 +134,16 @@ impl SurfaceProbe {
             self.last = Some((centre, radius));
             return Ok(self.force);
         }
-        // The lag `d` solves `d = g(d)`, `g` the modes' lag under the contact of the sphere
-        // moved by `-d`; Aitken-relaxed fixed point (Irons and Tuck) from the last step's `d`.
+        // The lag `d` solves `d = g(d)`, `g` the modes' lag at the span's end under the contact
+        // of the sphere moved by `-d`; Aitken-relaxed fixed point (Irons and Tuck) from the last
+        // solve's `d`.
         let (x, y) = (centre[0], centre[1]);
         let mut d = self.delta;
-        if self.last == Some((centre, radius)) {
-            if self.since_solve_s < super::TICK_S * (1.0 - 1e-9) {
-                return Ok(self.force);
-            }
-            let g = self.lag.as_ref().map_or([0.0; 3], |l| l.lag(x, y));
-            if (0..3).all(|c| (g[c] - d[c]).abs() < LAG_TOLERANCE_M) {
-                return Ok(self.force);
-            }
+        let still = self.last == Some((centre, radius));
+        if still && self.since_solve_s < self.span * (1.0 - 1e-9) {
+            return Ok(self.force);
         }
+        let span = if still { super::TICK_S.max(dt) } else { dt };
         self.last = None;
         let mut previous: Option<[f64; 3]> = None;
         for _ in 0..MAX_LAG_ITERATIONS {
@@ -149,7 +154,7 @@ impl SurfaceProbe {
                 let (q, normal, _) = scratch.window[w];
                 (compliance.position(q), normal.map(|c| c * lambda))
             }));
-            let g = lag.lag(x, y);
+            let g = lag.lag_after(x, y, span);
             let r: [f64; 3] = std::array::from_fn(|c| g[c] - d[c]);
             if r.iter().all(|v| v.abs() < LAG_TOLERANCE_M) {
                 break;
@@ -170,6 +175,7 @@ impl SurfaceProbe {
         self.delta = d;
         self.last = Some((centre, radius));
         self.since_solve_s = 0.0;
+        self.span = span;
         Ok(self.force)
     }
 
@@ -221,47 +227,86 @@ pub struct MaterialSurface {
 }
 
 impl MaterialSurface {
-    /// `material`'s: the compliance as [`load_or_compute`] finds it, and the modes (a second).
+    /// `material`'s: the compliance as [`load_or_compute`] finds it (`report` hears what it
+    /// says), and the modes (a second).
     pub fn load_or_compute(
         material: &Material,
         dir: Option<&Path>,
-        progress: &mut dyn FnMut(f64) -> bool,
+        report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
     ) -> anyhow::Result<Self> {
-        let compliance = load_or_compute(material, dir, progress)?;
+        let compliance = load_or_compute(material, dir, report)?;
         let modes = Arc::new(ModalBasis::of_material(material).map_err(anyhow::Error::msg)?);
         Ok(Self { compliance, modes })
     }
 }
 
-/// The file name of `material`'s surface compliance in a cache folder.
+/// The file name of `material`'s surface compliance in a cache folder: a hash of its key (the
+/// method's version, the face divisions, the stiffness), which the file holds in full.
 pub fn file_name(material: &Material) -> String {
     format!(
         "surface-compliance-{:016x}.bin",
-        crate::io::cache_key((1u32, DEFAULT_DIVISIONS), material.stiffness.iter())
+        crate::io::cache_key(
+            (crate::response::surface_compliance::METHOD_VERSION, DEFAULT_DIVISIONS),
+            material.stiffness.iter(),
+        )
     )
 }
 
-/// `material`'s surface compliance: read from `dir` where kept there, else computed
-/// (`progress(fraction)`, which stops the work by returning `false`) and written there
-/// (atomically) when a folder is given.
+/// What the cache's messages call the kept answer.
+const KEPT: &str = "the surface compliance";
+
+/// The report on standard error of computing a material's surface compliance, for the commands
+/// (`&mut |e| report.event(e)` as [`load_or_compute`]'s `report`).
+pub fn stderr_report() -> StderrReport {
+    StderrReport::new("the material's surface compliance", "40 s")
+}
+
+/// `material`'s surface compliance: read from the cache folder `dir` where the file there proves
+/// to be it (its key and checksum, [`SurfaceCompliance::from_bytes`]), else computed and kept
+/// there (written atomically). `report` hears, as [`CacheEvent`]s:
+/// - a line for a file refused (another material's, damaged, truncated, unreadable): it is not
+///   used, and the compliance is computed again;
+/// - before the work, a line where the answer cannot be kept (the folder not writable, a
+///   directory, FIFO or loop of links in the file's place, never opened): it is computed in
+///   memory;
+/// - the work's start and progress (its `false` stops the work);
+/// - a line where the write after the work fails: the computed answer is used all the same.
+///
+/// The errors are the computation's only: never the cache's.
 pub fn load_or_compute(
     material: &Material,
     dir: Option<&Path>,
-    progress: &mut dyn FnMut(f64) -> bool,
+    report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
 ) -> anyhow::Result<Arc<SurfaceCompliance>> {
-    let path = dir.map(|d| d.join(file_name(material)));
-    if let Some(path) = &path
-        && path.exists()
-        && let Ok(bytes) = crate::io::read_bytes(path, MAX_FILE_BYTES)
-        && let Ok(found) = SurfaceCompliance::from_bytes(&bytes)
-    {
-        return Ok(Arc::new(found));
+    let kept = dir.map(|d| KeptFile::new(d, &file_name(material), KEPT));
+    if let Some(kept) = &kept {
+        match kept.read(MAX_FILE_BYTES) {
+            Ok(Some(bytes)) => match SurfaceCompliance::from_bytes(&bytes, material, DEFAULT_DIVISIONS) {
+                Ok(found) => return Ok(Arc::new(found)),
+                Err(why) => {
+                    report(CacheEvent::Warning(&kept.refused(&why.to_string())));
+                }
+            },
+            Ok(None) => {}
+            Err(line) => {
+                report(CacheEvent::Warning(&line));
+            }
+        }
     }
-    let computed = SurfaceCompliance::compute(material, DEFAULT_DIVISIONS, progress)?;
-    if let (Some(path), Some(dir)) = (&path, dir) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| anyhow::anyhow!("cannot create the cache folder {}: {e}", dir.display()))?;
-        crate::io::write_atomic(path, &computed.to_bytes())?;
+    // Before the work: whether the answer can be kept.
+    let keep = kept.filter(|k| match k.check_writable() {
+        Ok(()) => true,
+        Err(line) => {
+            report(CacheEvent::Warning(&line));
+            false
+        }
+    });
+    report(CacheEvent::Computing { kept_in: keep.as_ref().map(KeptFile::dir) });
+    let computed = SurfaceCompliance::compute(material, DEFAULT_DIVISIONS, &mut |f| report(CacheEvent::Progress(f)))?;
+    if let Some(keep) = &keep
+        && let Err(line) = keep.write(&computed.to_bytes(material))
+    {
+        report(CacheEvent::Warning(&line));
     }
     Ok(Arc::new(computed))
 }

@@ -97,3 +97,142 @@ fn calibrate_on_touch_cases_polishes_and_the_stiffness_fit_runs() {
     ]);
     assert!(!o.status.success() && stderr(&o).contains("no shear stiffness"), "{}", stderr(&o));
 }
+
+#[test]
+fn calibrate_refuses_presses_that_touch_no_node_at_once() {
+    // On a 2^3 or 3^3 grid every training sphere passes between the top nodes: no press has a
+    // contact, every force is zero whatever the stiffness, and the cost is 1. Refused before any
+    // reference is computed, naming the grid and one that works.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("presses.json");
+    for nodes in ["2", "3"] {
+        let started = std::time::Instant::now();
+        let o = run(&[
+            "calibrate",
+            "--object",
+            "A",
+            "--model",
+            "hex",
+            "--cases",
+            "presses",
+            "--nodes",
+            nodes,
+            "--population",
+            "2",
+            "--generations",
+            "1",
+            "--out",
+            out.to_str().expect("utf8"),
+        ]);
+        let took = started.elapsed().as_secs_f64();
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let e = stderr(&o);
+        assert!(e.contains(&format!("no training press touches a node of the {nodes}^3 grid")), "{e}");
+        assert!(e.contains("--nodes 4") && e.lines().count() == 1, "{e}");
+        assert!(took < 2.0, "refused after {took} s");
+        assert!(!out.exists(), "nothing written");
+    }
+}
+
+#[test]
+fn calibrate_refuses_a_cost_mode_its_cases_or_method_cannot_use() {
+    // The transient cost integrates only the paper's nine face loads: with other cases it would
+    // train on those and name the others. The load-free stiffness fit identifies no damping.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("transient.json");
+    for cases in ["presses", "touch", "both"] {
+        let started = std::time::Instant::now();
+        let o = run(&[
+            "calibrate",
+            "--object",
+            "A",
+            "--model",
+            "hex",
+            "--cost",
+            "transient",
+            "--cases",
+            cases,
+            "--population",
+            "2",
+            "--generations",
+            "1",
+            "--out",
+            out.to_str().expect("utf8"),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(stderr(&o).contains(&format!("--cost transient cannot use --cases {cases}")), "{}", stderr(&o));
+        assert!(started.elapsed().as_secs_f64() < 2.0, "refused after {:?}", started.elapsed());
+        assert!(!out.exists(), "nothing written");
+    }
+    let o = run(&[
+        "calibrate",
+        "--object",
+        "A",
+        "--method",
+        "stiffness-fit",
+        "--cost",
+        "transient",
+        "--out",
+        out.to_str().expect("utf8"),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--method stiffness-fit cannot use --cost transient"), "{}", stderr(&o));
+    // The paper's cases still train the transient cost.
+    let o = run(&[
+        "calibrate",
+        "--object",
+        "B",
+        "--cost",
+        "transient",
+        "--population",
+        "4",
+        "--generations",
+        "2",
+        "--out",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).expect("read")).expect("json");
+    assert_eq!((v["cases"].as_str(), v["d_identified"].as_bool()), (Some("paper"), Some(true)));
+}
+
+#[test]
+fn calibrate_polish_stays_inside_the_box_it_reports() {
+    // At 4^3 few training presses touch a node, so the press cost leaves several genes free: the
+    // polish used to leave the box by up to 10^5. It ends inside, and names the bounds it is on.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("presses4.json");
+    let o = run(&[
+        "calibrate",
+        "--object",
+        "A",
+        "--model",
+        "hex",
+        "--cases",
+        "presses",
+        "--nodes",
+        "4",
+        "--population",
+        "2",
+        "--generations",
+        "1",
+        "--out",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).expect("read")).expect("json");
+    let names = v["bounds"]["names"].as_array().expect("names");
+    let bound = |key: &str, i: usize| v["bounds"][key][i].as_f64().expect("bound");
+    for (i, name) in names.iter().enumerate().filter(|(_, n)| n.as_str() != Some("d")) {
+        let name = name.as_str().expect("name");
+        let x = v["params"][name].as_f64().expect("gene");
+        assert!(bound("lo", i) <= x && x <= bound("hi", i), "{name} = {x} outside its box");
+    }
+    assert!(v["polish"].get("left_box").is_none());
+    for entry in v["polish"]["at_bound"].as_array().expect("at_bound") {
+        let (name, side) = entry.as_str().and_then(|e| e.split_once('=')).expect("NAME=lo|hi");
+        let i = names.iter().position(|n| n.as_str() == Some(name)).expect("a gene");
+        let x = v["params"][name].as_f64().expect("gene");
+        assert!((x / bound(side, i) - 1.0).abs() < 1e-6, "{entry}: {x}");
+    }
+}

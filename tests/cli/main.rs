@@ -6,6 +6,7 @@ use std::process::{Command, Output};
 use tissue_sim::mechanics::displacement_file::DisplacementFile;
 
 mod bad_input;
+mod cache;
 mod calibrate;
 mod chart;
 mod commands;

@@ -6,6 +6,7 @@ mod dynamics;
 mod fem_reference;
 mod gpu_step;
 mod msm_statics;
+mod probe_hold;
 mod probe_material;
 mod stability;
 mod touch;

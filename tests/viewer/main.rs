@@ -1,6 +1,7 @@
-//! Whole behaviours of the interactive side, one test binary: scripted interaction (the
+//! Whole behaviours of the interactive side, one test binary: the probe gesture, scripted interaction (the
 //! `simulate` engine), shader validation, and offscreen rendering.
 
+mod gesture;
 mod interaction;
 mod render;
 mod shaders;

@@ -44,6 +44,8 @@ pub fn show(
     requests: &mut Vec<Request>,
 ) {
     header(ui, shown, ctx);
+    // The left-button tool first, where it is always in view (keys p, d, c).
+    tools::tool_picker(ui, settings);
     ui.separator();
     egui::CollapsingHeader::new("Object and model")
         .default_open(true)

@@ -18,20 +18,19 @@ pub fn show(
     ctx: &PanelContext<'_>,
     requests: &mut Vec<Request>,
 ) {
-    ui.horizontal(|ui| {
-        ui.selectable_value(&mut settings.tool, ToolKind::Drag, "drag");
-        ui.selectable_value(&mut settings.tool, ToolKind::Probe, "probe");
-        ui.selectable_value(&mut settings.tool, ToolKind::Orbit, "camera only");
-    });
     ui.label("Left mouse: the tool; right mouse: rotate; wheel: zoom.");
     if settings.tool == ToolKind::Probe {
         probe_settings(ui, settings);
     }
     let f = ctx.published.tool_force;
     let norm = DVec3::from(f).length();
-    ui.label(format!("force on tool: |F| = {norm:.4} N  ({:.4}, {:.4}, {:.4})", f[0], f[1], f[2]));
     if settings.tool == ToolKind::Probe {
+        // The number beside the sphere, said once.
+        let depth = shown.force_depth.last().map_or(0.0, |s| s[0]);
+        ui.label(format!("probe force {norm:.2} N at {depth:.1} mm indentation"));
         ui.label(contact_line(shown, ctx));
+    } else {
+        ui.label(format!("force on tool: |F| = {norm:.4} N  ({:.4}, {:.4}, {:.4})", f[0], f[1], f[2]));
     }
     if let Tool::Drag { .. } = shown.tool {
         ui.label(format!(
@@ -100,14 +99,36 @@ pub fn show(
     }
 }
 
+/// The left-button tool, by the buttons or the keyboard (where no text field takes the keys):
+/// `p` probe, `d` drag, `c` camera.
+pub fn tool_picker(ui: &mut egui::Ui, settings: &mut ViewSettings) {
+    if !ui.ctx().egui_wants_keyboard_input() {
+        for (key, tool) in
+            [(egui::Key::P, ToolKind::Probe), (egui::Key::D, ToolKind::Drag), (egui::Key::C, ToolKind::Orbit)]
+        {
+            if ui.ctx().input(|i| i.key_pressed(key)) {
+                settings.tool = tool;
+            }
+        }
+    }
+    ui.horizontal(|ui| {
+        ui.selectable_value(&mut settings.tool, ToolKind::Drag, "drag (d)");
+        ui.selectable_value(&mut settings.tool, ToolKind::Probe, "probe (p)");
+        ui.selectable_value(&mut settings.tool, ToolKind::Orbit, "camera only (c)");
+    });
+}
+
 /// How to press and slide the probe, and its size.
 fn probe_settings(ui: &mut egui::Ui, settings: &mut ViewSettings) {
     ui.label(
-        "Probe: press with the left button and move down to push (0.1 mm a pixel) or turn the wheel (0.25 mm a \
-         notch); hold Shift and move to slide it across the surface at that depth (palpation). The force shows \
-         next to the sphere.",
+        "Probe: press with the left button where it should touch and move down to push it in along the \
+         surface's inward normal there (0.1 mm a pixel) or turn the wheel (0.25 mm a notch); hold Shift and move \
+         to slide it across the surface at that depth (palpation). The depth is the indentation along the push; \
+         the force shows next to the sphere.",
     );
-    ui.add(egui::Slider::new(&mut settings.probe_radius_mm, 2.0..=30.0).text("probe radius (mm)"));
+    ui.checkbox(&mut settings.probe_along_view, "push along the view ray instead");
+    let (lo, hi) = (crate::sim::press::MIN_RADIUS_M * 1e3, crate::sim::press::MAX_RADIUS_M * 1e3);
+    ui.add(egui::Slider::new(&mut settings.probe_radius_mm, lo..=hi).text("probe radius (mm)"));
 }
 
 /// What the probe touches: the material's surface compliance, or the model's nodes until it is

@@ -40,9 +40,17 @@ impl ViewerState {
             move |ctx| {
                 let dir = crate::io::cache_dir();
                 // Stopped within a batch when the viewer closes or the material changes.
-                let r = MaterialSurface::load_or_compute(&material, dir.as_deref(), &mut |f| {
-                    ctx.send(ComplianceMessage::Progress(f));
-                    !ctx.cancelled()
+                let r = MaterialSurface::load_or_compute(&material, dir.as_deref(), &mut |event| match event {
+                    crate::io::cache::CacheEvent::Progress(f) => {
+                        ctx.send(ComplianceMessage::Progress(f));
+                        !ctx.cancelled()
+                    }
+                    // A cache file refused, or the answer not kept: said where the viewer was started.
+                    crate::io::cache::CacheEvent::Warning(line) => {
+                        eprintln!("{line}");
+                        true
+                    }
+                    crate::io::cache::CacheEvent::Computing { .. } => true,
                 });
                 ctx.send(ComplianceMessage::Done(r.map_err(|e| format!("{e:#}"))));
             },

@@ -223,7 +223,13 @@ impl Simulation {
         let on_device = self.tissue.state_on_device();
         let implicit = self.integrator != Integrator::Symplectic;
         let mut stepped = if on_device && implicit { self.tissue.sync() } else { Ok(()) };
-        self.apply_tool_load();
+        if let Err(message) = self.apply_tool_load() {
+            // The tool is let go and the run told: its force cannot be given truly.
+            self.tool = Tool::None;
+            self.tool_force = [0.0; 3];
+            let _ = self.apply_tool_load();
+            return Err(BlowUp { time_s: self.time_s, message, fatal: true });
+        }
         let anchored = self.anchor_drag();
         let drag = match self.tool {
             Tool::Drag { node, target } if !implicit && self.tissue.free()[node] != 0.0 => Some((node, target)),

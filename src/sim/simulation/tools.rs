@@ -19,7 +19,10 @@ impl Simulation {
         self.surface_probe.is_some()
     }
 
-    pub(super) fn apply_tool_load(&mut self) {
+    /// Puts the tool's loads on the tissue. A probe over the top face takes its force from the
+    /// material's surface compliance where the simulation has one; a contact that cannot be
+    /// solved there is an error naming its cause (never another contact's force under its name).
+    pub(super) fn apply_tool_load(&mut self) -> Result<(), String> {
         if self.tool == Tool::None {
             self.tool_force = [0.0; 3];
         }
@@ -35,10 +38,21 @@ impl Simulation {
             }
             self.tool_loaded.clear();
         }
-        if let (Tool::Probe { centre, radius }, Some(probe)) = (self.tool, self.surface_probe.as_mut())
-            && crate::sim::surface_probe::SurfaceProbe::covers(centre)
-            && let Ok(force) = probe.update(centre, radius)
-        {
+        let on_surface = match (self.tool, self.surface_probe.as_mut()) {
+            (Tool::Probe { centre, radius }, Some(probe))
+                if crate::sim::surface_probe::SurfaceProbe::covers(centre) =>
+            {
+                match probe.update(centre, radius, self.dt) {
+                    Ok(force) => Some(force),
+                    Err(e) => {
+                        probe.release();
+                        return Err(format!("the probe's contact on the material's surface failed: {e}"));
+                    }
+                }
+            }
+            _ => None,
+        };
+        if let (Some(force), Some(probe)) = (on_surface, self.surface_probe.as_ref()) {
             if carries && let Some(nodes) = span(probe.loads().iter().map(|&(node, _)| node)) {
                 let f_ext = self.tissue.f_ext_mut_nodes(nodes);
                 for &(node, f) in probe.loads() {
@@ -53,6 +67,13 @@ impl Simulation {
         } else if let Some(probe) = self.surface_probe.as_mut() {
             probe.release();
         }
+        Ok(())
+    }
+
+    /// Whether the probe's last force came from the material's surface compliance (else, while
+    /// it touches, from the model's surface nodes).
+    pub fn probe_on_surface(&self) -> bool {
+        self.probe_on_surface
     }
 
     /// Under an implicit scheme, the dragging spring goes inside the tissue's solve
@@ -302,5 +323,25 @@ mod tests {
         sim.tool = Tool::None;
         sim.step().expect("step");
         assert!(sim.tissue.f_ext_mut() == &base, "the case's loads once the probe lifts");
+    }
+
+    /// A contact the material's surface compliance cannot solve (here a singular one) stops the
+    /// run with its cause and lets the probe go: before, the simulation took the force from the
+    /// model's nodes under the surface's name.
+    #[test]
+    fn a_surface_contact_that_cannot_be_solved_is_an_error_not_a_fallback() {
+        use crate::response::surface_compliance::SurfaceCompliance;
+        let material = Material::object_a();
+        let tissue = Model::Lattice(crate::mechanics::msm::Topology::Hex).build(&material, None, 0.2).expect("hex");
+        let grid = tissue.grid();
+        let case = LoadCase::bottom_clamp(&grid, "A");
+        let mut sim = Simulation::with_tissue(tissue, Integrator::Symplectic, 1e-4, Some(&case));
+        let singular = std::sync::Arc::new(SurfaceCompliance::uniform(4, 0.0));
+        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::new(singular, grid)));
+        sim.tool = Tool::Probe { centre: [0.05, 0.05, 0.1 + 0.015 - 0.004], radius: 0.015 };
+        let e = sim.step().expect_err("the contact cannot be solved");
+        assert!(e.fatal && e.message.contains("contact on the material's surface failed"), "{e:?}");
+        assert_eq!(sim.tool, Tool::None);
+        assert_eq!(sim.tool_force, [0.0; 3]);
     }
 }

@@ -92,10 +92,11 @@ fn probe_tick_here(
     let tissue = model.build(&material, None, crate::response::damping::DEFAULT_DAMPING_RATIO)?;
     let mut sim = Simulation::with_tissue(tissue, integrator, dt, Some(&LoadCase::bottom_clamp(&grid, "A")));
     if run != ProbeRun::NodesStill {
+        let mut report = crate::sim::surface_probe::stderr_report();
         let c = crate::sim::surface_probe::MaterialSurface::load_or_compute(
             &material,
             crate::io::cache_dir().as_deref(),
-            &mut |_| true,
+            &mut |e| report.event(e),
         )?;
         let zeta = sim.tissue.damping().ratio();
         sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::on(&c, grid, zeta)));

@@ -128,8 +128,11 @@ pub fn sweep_model(
 
 /// Runs the sweep (minutes: the 32^3 factorisations and corotational steps dominate).
 pub fn run() -> anyhow::Result<Sweep> {
+    let mut report = crate::sim::surface_probe::stderr_report();
     let surface =
-        MaterialSurface::load_or_compute(&Material::object_a(), crate::io::cache_dir().as_deref(), &mut |_| true)?;
+        MaterialSurface::load_or_compute(&Material::object_a(), crate::io::cache_dir().as_deref(), &mut |e| {
+            report.event(e)
+        })?;
     let gpu = crate::gpu::ComputeDevice::open();
     let started = std::time::Instant::now();
     let mut ticks = Vec::new();

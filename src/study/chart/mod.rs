@@ -121,8 +121,11 @@ fn dynamic_references(
 /// The material's surface compliance as the probe's contact: its worst validation error against
 /// the material, percent, and its time per 1 ms tick with the probe sliding (one contact solve).
 fn surface_probe_figures(material: &Material, kept: &mut ContinuumCache) -> anyhow::Result<ProbeFigures> {
+    let mut report = crate::sim::surface_probe::stderr_report();
     let compliance =
-        crate::sim::surface_probe::load_or_compute(material, crate::io::cache_dir().as_deref(), &mut |_| true)?;
+        crate::sim::surface_probe::load_or_compute(material, crate::io::cache_dir().as_deref(), &mut |e| {
+            report.event(e)
+        })?;
     let mut scratch = ContactScratch::default();
     let worst = worst_validation_error(material, kept, &mut |press| {
         crate::validate::probe::score::compliance_force_n(&compliance, &mut scratch, press)

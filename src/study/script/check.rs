@@ -55,6 +55,14 @@ pub(super) fn check_script(script: &Script) -> anyhow::Result<()> {
     if script.actions.len() > MAX_ACTIONS {
         anyhow::bail!("script: {} actions, above the bound of {MAX_ACTIONS}", script.actions.len());
     }
+    // Where the tissue is held, for the presses' check: the model's node nearest a point.
+    let fixed = super::clamp_case(&grid, script.object.name(), &script.clamp)?.map(|c| c.fixed_nodes());
+    let held = |p: [f64; 3]| {
+        let (h, top) = (grid.h(), (grid.n() - 1) as f64);
+        let at = |v: f64| (v / h).round().clamp(0.0, top) as usize;
+        fixed.as_ref().is_some_and(|f| f[grid.node(at(p[0]), at(p[1]), at(p[2]))])
+    };
+    let surface = script.contact == super::Contact::Surface;
     let last = script.actions.len().saturating_sub(1);
     let recorded = script.actions.iter().enumerate().filter(|&(i, a)| a.record() || i == last).count();
     if recorded > MAX_RECORDED {
@@ -62,7 +70,7 @@ pub(super) fn check_script(script: &Script) -> anyhow::Result<()> {
     }
     let mut total_samples = 0usize;
     for (i, a) in script.actions.iter().enumerate() {
-        check_action(a, &grid).map_err(|e| anyhow::anyhow!("script: action {i}: {e}"))?;
+        check_action(a, &grid, surface, &held).map_err(|e| anyhow::anyhow!("script: action {i}: {e}"))?;
         match a {
             Action::Probe { samples, .. } => total_samples += samples,
             Action::ProbePath { sample_hz, .. } => {
@@ -131,8 +139,10 @@ fn check_path(radius: f64, keys: &[PathKey], sample_hz: f64) -> anyhow::Result<(
     Ok(())
 }
 
-/// One action's node, points, sizes, duration and samples.
-fn check_action(action: &Action, grid: &Grid) -> anyhow::Result<()> {
+/// One action's node, points, sizes, duration and samples; a press also by the limits of its
+/// contact ([`crate::sim::press`]; `surface`: on the material's surface compliance, `held(p)`:
+/// the tissue is held at `p`).
+fn check_action(action: &Action, grid: &Grid, surface: bool, held: &dyn Fn([f64; 3]) -> bool) -> anyhow::Result<()> {
     match action {
         Action::Drag { node, to, .. } => {
             let nodes = grid.num_nodes();
@@ -148,12 +158,17 @@ fn check_action(action: &Action, grid: &Grid) -> anyhow::Result<()> {
             if !(1..=MAX_SAMPLES_PER_PROBE).contains(samples) {
                 anyhow::bail!("samples = {samples} is out of range (1 to {MAX_SAMPLES_PER_PROBE} per probe)");
             }
-            Ok(())
+            crate::sim::press::check(*at, *direction, *radius, *depth, surface, held).map_err(anyhow::Error::msg)
         }
         Action::ProbePath { radius, direction, keys, sample_hz, .. } => {
             check_sizes(*radius, 0.0)?;
             check_direction(direction)?;
-            check_path(*radius, keys, *sample_hz)
+            check_path(*radius, keys, *sample_hz)?;
+            for (k, key) in keys.iter().enumerate() {
+                crate::sim::press::check(key.at, *direction, *radius, key.depth, surface, held)
+                    .map_err(|e| anyhow::anyhow!("keys[{k}]: {e}"))?;
+            }
+            Ok(())
         }
         Action::Release { .. } | Action::Wait { .. } => Ok(()),
     }?;

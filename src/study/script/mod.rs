@@ -51,8 +51,10 @@
 use glam::DVec3;
 
 mod check;
+mod outcome;
 mod path;
 
+pub use outcome::{Event, Outcome, ProbeSample};
 pub use path::{PathKey, PathSample};
 
 use check::{check_script, check_steps};
@@ -122,6 +124,13 @@ pub enum Contact {
     Surface,
     /// The running model's surface nodes, projected out of the sphere.
     Nodes,
+}
+
+impl Contact {
+    /// The contact that produced the simulation's last probe force.
+    pub fn of(sim: &Simulation) -> Self {
+        if sim.probe_on_surface() { Contact::Surface } else { Contact::Nodes }
+    }
 }
 
 /// The largest grid a script runs on, nodes per axis.
@@ -214,85 +223,6 @@ fn default_samples() -> usize {
     10
 }
 
-/// The state at the end of an action.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Event {
-    /// Index of the action.
-    pub action: usize,
-    /// `drag`, `probe`, `release` or `wait`.
-    pub kind: String,
-    /// Simulated time, s.
-    pub time_s: f64,
-    /// Force of the tissue on the tool, newtons.
-    pub tool_force_n: [f64; 3],
-    /// Largest distance of a node from its rest position, metres.
-    pub max_displacement_m: f64,
-    /// Node positions, metres: only for an action with `"record": true`, and the last.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub positions: Option<Vec<[f64; 3]>>,
-}
-
-/// One probe sample.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ProbeSample {
-    /// Index of the probe action.
-    pub action: usize,
-    /// Indentation depth, metres.
-    pub depth_m: f64,
-    /// Force of the tissue on the probe along `-direction`, newtons.
-    pub force_n: f64,
-}
-
-/// What a script produced.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Outcome {
-    /// Object label.
-    pub object: String,
-    /// Model.
-    pub model: Model,
-    /// Integrator used.
-    pub integrator: Integrator,
-    /// Time step used, s: the script's `dt`, or a substep of it that the automatic choice took
-    /// (as the viewer's physics does), said in `note`.
-    pub dt: f64,
-    /// What the step policy said, if anything.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub note: Option<String>,
-    /// Nodes per axis.
-    pub nodes_per_axis: usize,
-    /// The probe's contact.
-    pub contact: Contact,
-    /// Where the steps were computed.
-    pub compute: Compute,
-    /// Steps taken.
-    pub steps: u64,
-    /// One event per action.
-    pub events: Vec<Event>,
-    /// Probe force against depth.
-    pub force_depth: Vec<ProbeSample>,
-    /// Probe force along the probe paths.
-    pub force_path: Vec<PathSample>,
-    /// Blow-ups detected (and recovered from).
-    pub blow_ups: Vec<String>,
-}
-
-impl Outcome {
-    /// Checks that every number of the outcome is finite (before it is written).
-    pub fn check_finite(&self) -> anyhow::Result<()> {
-        for e in &self.events {
-            let pos = e.positions.iter().flatten().flatten();
-            if !(e.tool_force_n.iter().chain(pos).all(|v| v.is_finite()) && e.max_displacement_m.is_finite()) {
-                anyhow::bail!("script: action {} ended in a non-finite state", e.action);
-            }
-        }
-        let path = self.force_path.iter().flat_map(|s| s.force.iter().chain([&s.force_n]));
-        if self.force_depth.iter().map(|s| &s.force_n).chain(path).any(|v| !v.is_finite()) {
-            anyhow::bail!("script: a probe force is not finite");
-        }
-        Ok(())
-    }
-}
-
 /// The script's model of `material` on `grid`, damped as it says, where it computes.
 fn tissue(script: &Script, grid: Grid, material: &Material) -> anyhow::Result<Box<dyn crate::sim::Tissue>> {
     if script.damping_ratio.is_some() && !script.model.takes_damping_ratio() {
@@ -331,10 +261,11 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     check_steps(script, sim.dt)?;
     let probes = script.actions.iter().any(|a| matches!(a, Action::Probe { .. } | Action::ProbePath { .. }));
     if script.contact == Contact::Surface && probes {
+        let mut report = crate::sim::surface_probe::stderr_report();
         let surface = crate::sim::surface_probe::MaterialSurface::load_or_compute(
             &material,
             crate::io::cache_dir().as_deref(),
-            &mut |_| true,
+            &mut |e| report.event(e),
         )
         .map_err(|e| anyhow::anyhow!("script: the probe's surface compliance: {e:#}"))?;
         let zeta = sim.tissue.damping().ratio();
@@ -457,16 +388,15 @@ fn probe(
     sim: &mut Simulation,
     out: &mut Outcome,
 ) -> anyhow::Result<()> {
-    let len = DVec3::from(direction).length();
-    let dir = direction.map(|d| d / len);
+    let dir = DVec3::from(direction).normalize();
     for s in 1..=n {
         let d = depth * s as f64 / n as f64;
-        let centre = std::array::from_fn(|c| at[c] - radius * dir[c] + d * dir[c]);
+        let centre = crate::sim::press::centre(at, dir, radius, d);
         sim.tool = Tool::Probe { centre, radius };
         step(sim, out)?;
         if s * samples % n < samples {
-            let along = -(DVec3::from(sim.tool_force).dot(DVec3::from(dir)));
-            out.force_depth.push(ProbeSample { action: i, depth_m: d, force_n: along });
+            let along = -DVec3::from(sim.tool_force).dot(dir);
+            out.force_depth.push(ProbeSample { action: i, depth_m: d, force_n: along, contact: Contact::of(sim) });
         }
     }
     Ok(())

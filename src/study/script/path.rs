@@ -52,6 +52,9 @@ pub struct PathSample {
     pub force_n: f64,
     /// Force of the tissue on the probe, newtons.
     pub force: [f64; 3],
+    /// What produced the force: the material's surface compliance (`surface`), or the model's
+    /// surface nodes (`nodes`: asked for, or off the top face).
+    pub contact: super::Contact,
 }
 
 /// A probe path action `i`: `(radius, direction, keys, sample_hz)` over `n` steps.
@@ -73,13 +76,14 @@ pub(super) fn probe_path(
     for s in 1..=n {
         let t = total * s as f64 / n as f64;
         let (at, depth) = path_at(keys, t);
-        let centre = (DVec3::from(at) - radius * dir + depth * dir).to_array();
+        let centre = crate::sim::press::centre(at, dir, radius, depth);
         sim.tool = Tool::Probe { centre, radius };
         step(sim, out)?;
         if t * sample_hz >= next_sample - tol || s == n && sampled == 0 {
             let force = sim.tool_force;
             let force_n = -DVec3::from(force).dot(dir);
-            out.force_path.push(PathSample { action: i, t, at, depth_m: depth, force_n, force });
+            let contact = super::Contact::of(sim);
+            out.force_path.push(PathSample { action: i, t, at, depth_m: depth, force_n, force, contact });
             sampled += 1;
             next_sample = (t * sample_hz + tol).floor() + 1.0;
         }

@@ -87,7 +87,8 @@ impl References {
             let tap = crate::validate::continuum::cache::tap(material, zeta, dir.as_deref(), &mut |s| {
                 eprintln!("the material's tap ({}): {s}", material.name);
             })?;
-            let compliance = MaterialSurface::load_or_compute(material, dir.as_deref(), &mut |_| true)?;
+            let mut report = crate::sim::surface_probe::stderr_report();
+            let compliance = MaterialSurface::load_or_compute(material, dir.as_deref(), &mut |e| report.event(e))?;
             Some((tap, compliance))
         } else {
             None

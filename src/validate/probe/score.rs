@@ -87,7 +87,7 @@ pub fn evaluate(
         let material_force = match material_force {
             Ok(f) => f,
             Err(e) => {
-                cache.save()?;
+                cache.save();
                 return Err(e);
             }
         };
@@ -105,7 +105,7 @@ pub fn evaluate(
             own_mesh_error: if own > 0.0 { force_n / own - 1.0 } else { 0.0 },
         });
     }
-    cache.save()?;
+    cache.save();
     let of = |set: Set, f: &dyn Fn(&PressScore) -> f64| -> Vec<f64> {
         let mut v: Vec<f64> = scores.iter().filter(|c| c.set == set).map(f).collect();
         v.sort_by(f64::total_cmp);
@@ -147,20 +147,32 @@ pub fn worst_validation_error(
         let m = cache.force(material, &case.press, crate::validate::continuum::DEFAULT_TOLERANCE, &mut |_| {})?;
         worst = worst.max((force(&case.press)? / m.force_n - 1.0).abs());
     }
-    cache.save()?;
+    cache.save();
     Ok(worst)
 }
 
 /// The training presses with the material's force on each (the magnitude, newtons), from the
-/// shipped answers or the cache folder (computed and kept there where missing: minutes).
+/// shipped answers or the cache folder (computed and kept there where missing: minutes, each
+/// press said on standard error as it starts).
 pub fn training_forces(material: &Material) -> anyhow::Result<Vec<(Press, f64)>> {
     let mut cache = ContinuumCache::open(material, crate::io::cache_dir().as_deref());
     let mut out = Vec::new();
-    for case in press_cases().iter().filter(|c| c.set == Set::Training) {
-        let m = cache.force(material, &case.press, crate::validate::continuum::DEFAULT_TOLERANCE, &mut |_| {})?;
+    let all = press_cases();
+    let cases: Vec<&PressCase> = all.iter().filter(|c| c.set == Set::Training).collect();
+    let tolerance = crate::validate::continuum::DEFAULT_TOLERANCE;
+    for (i, case) in cases.iter().enumerate() {
+        if cache.get(&case.press, tolerance).is_none() {
+            eprintln!(
+                "tissue-sim: computing the material's force on training press {} of {} ({}; 2 to 15 s each)",
+                i + 1,
+                cases.len(),
+                case.id
+            );
+        }
+        let m = cache.force(material, &case.press, tolerance, &mut |_| {})?;
         out.push((case.press, glam::DVec3::from(m.force).length()));
     }
-    cache.save()?;
+    cache.save();
     Ok(out)
 }
 

@@ -1,0 +1,235 @@
+//! The presses the probe's contact can resolve, checked before a run: the one home of the
+//! probe's size and depth limits (scripts, `--help` and the viewer's radius take them from here).
+//!
+//! A press is a rigid frictionless sphere of `radius` tangent to the tissue's undeformed surface
+//! at the point `at` ([`centre`]) and moved `depth` along the unit `direction`. Its contact is refused when:
+//! - the sphere is smaller than the material's surface grid resolves ([`MIN_RADIUS_M`]: its
+//!   contact patch would span about one node of the 2 mm face grid);
+//! - it is wider than the contact holds ([`MAX_RADIUS_M`], and at most
+//!   [`MAX_CONTACT_NODES`] face nodes under it on the top face);
+//! - it goes deeper than it can be pressed ([`MAX_DEPTH_OF_RADIUS`] of its radius: beyond, the
+//!   contact linearised along the normals at rest turns the nodes past the sphere's equator and
+//!   the force falls, then pulls);
+//! - it starts inside the tissue, or moves along a direction that does not take it into the
+//!   tissue, or presses a clamped face (held nodes take any load: the force would be the
+//!   support's, not the material's).
+
+use glam::DVec3;
+
+use crate::mechanics::grid::CUBE_SIDE_M;
+pub use crate::response::surface_compliance::MAX_CONTACT_NODES;
+use crate::response::surface_compliance::{DEFAULT_DIVISIONS, window_count};
+
+/// The smallest probe radius, metres: 2.5 nodes of the surface grid.
+pub const MIN_RADIUS_M: f64 = 0.005;
+/// The largest probe radius, metres.
+pub const MAX_RADIUS_M: f64 = 0.05;
+/// The deepest press, as a fraction of the radius.
+pub const MAX_DEPTH_OF_RADIUS: f64 = 0.75;
+/// How far a point may be from a face and still lie on it, metres.
+const ON_SURFACE_M: f64 = 1e-6;
+
+/// The limits in one line, for `--help` and messages.
+pub const LIMITS: &str = "probe radius 5 to 50 mm, depth at most 3/4 of the radius, starting on or outside the \
+                          tissue's surface, moving into it, not into a clamped face";
+
+/// The outward normal of the tissue's surface at `at`: the normal of the face `at` lies on, or
+/// on an edge or corner the normalised sum of its faces' normals; `None` off the surface.
+pub fn outward_normal(at: [f64; 3]) -> Option<DVec3> {
+    let p = DVec3::from(at);
+    if (0..3).any(|c| !(-ON_SURFACE_M..=CUBE_SIDE_M + ON_SURFACE_M).contains(&p[c])) {
+        return None;
+    }
+    let mut n = DVec3::ZERO;
+    for c in 0..3 {
+        if p[c].abs() <= ON_SURFACE_M {
+            n[c] -= 1.0;
+        } else if (p[c] - CUBE_SIDE_M).abs() <= ON_SURFACE_M {
+            n[c] += 1.0;
+        }
+    }
+    (n != DVec3::ZERO).then(|| n.normalize())
+}
+
+/// The sphere's centre for a press: at depth 0 tangent to the undeformed surface at `at`
+/// (centre at `at + radius n`, `n` its [`outward_normal`]; off the surface, touching `at` along
+/// `direction`), moved `depth` along the unit `direction`.
+pub fn centre(at: [f64; 3], direction: DVec3, radius: f64, depth: f64) -> [f64; 3] {
+    let n = outward_normal(at).unwrap_or(-direction);
+    (DVec3::from(at) + radius * n + depth * direction).to_array()
+}
+
+/// Where a touch of the (deformed) tissue at `hit` meets its undeformed surface: the point of the
+/// nearest face (faces within half a millimetre of as near: an edge or corner), and that
+/// surface's [`outward_normal`] there.
+pub fn touch(hit: [f64; 3]) -> ([f64; 3], DVec3) {
+    const EDGE_M: f64 = 5e-4;
+    let mut at = hit.map(|v| v.clamp(0.0, CUBE_SIDE_M));
+    let distance = at.map(|v| v.min(CUBE_SIDE_M - v));
+    let nearest = distance.iter().copied().fold(f64::INFINITY, f64::min);
+    for c in 0..3 {
+        if distance[c] <= nearest + EDGE_M {
+            at[c] = if at[c] < 0.5 * CUBE_SIDE_M { 0.0 } else { CUBE_SIDE_M };
+        }
+    }
+    let n = outward_normal(at).unwrap_or(DVec3::Z);
+    (at, n)
+}
+
+/// The deepest press of a probe of `radius` that its contact resolves anywhere on the top face
+/// (at most [`MAX_DEPTH_OF_RADIUS`] of the radius, and at most [`MAX_CONTACT_NODES`] face nodes
+/// under it), metres.
+pub fn max_depth(radius: f64) -> f64 {
+    let s = CUBE_SIDE_M / DEFAULT_DIVISIONS as f64;
+    let fits = |depth: f64| {
+        [(0.0, 0.0), (0.5 * s, 0.0), (0.5 * s, 0.5 * s)].iter().all(|&(dx, dy)| {
+            let centre = [0.5 * CUBE_SIDE_M + dx, 0.5 * CUBE_SIDE_M + dy, CUBE_SIDE_M + radius - depth];
+            window_count(DEFAULT_DIVISIONS, centre, radius) <= MAX_CONTACT_NODES
+        })
+    };
+    let deepest = MAX_DEPTH_OF_RADIUS * radius;
+    if fits(deepest) {
+        return deepest;
+    }
+    let (mut lo, mut hi) = (0.0, deepest);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if fits(mid) { lo = mid } else { hi = mid }
+    }
+    lo
+}
+
+/// How far `p` lies inside the cube, metres (negative outside).
+fn inside_by(p: DVec3) -> f64 {
+    (0..3).map(|c| p[c].min(CUBE_SIDE_M - p[c])).fold(f64::INFINITY, f64::min)
+}
+
+/// Checks a probe's radius, metres.
+pub fn check_radius(radius: f64) -> Result<(), String> {
+    if radius.is_nan() || radius < MIN_RADIUS_M {
+        return Err(format!(
+            "a probe of radius {} mm is smaller than the material's surface grid resolves (2 mm nodes): the radius \
+             must be at least {} mm",
+            crate::io::num(radius * 1e3),
+            MIN_RADIUS_M * 1e3
+        ));
+    }
+    if radius > MAX_RADIUS_M {
+        return Err(format!(
+            "a probe of radius {} mm is wider than the contact can hold: the radius must be at most {} mm",
+            crate::io::num(radius * 1e3),
+            MAX_RADIUS_M * 1e3
+        ));
+    }
+    Ok(())
+}
+
+/// Checks one press (`direction` non-zero; `fixed(p)`: whether the tissue is held at the surface
+/// point `p`). `surface`: the force comes from the material's surface compliance, whose contact
+/// holds at most [`MAX_CONTACT_NODES`] nodes of the top face.
+pub fn check(
+    at: [f64; 3],
+    direction: [f64; 3],
+    radius: f64,
+    depth: f64,
+    surface: bool,
+    fixed: &dyn Fn([f64; 3]) -> bool,
+) -> Result<(), String> {
+    check_radius(radius)?;
+    if depth > MAX_DEPTH_OF_RADIUS * radius {
+        return Err(format!(
+            "depth {} mm is deeper than a probe of radius {} mm can be pressed (at most {} of its radius, {} mm)",
+            crate::io::num(depth * 1e3),
+            crate::io::num(radius * 1e3),
+            MAX_DEPTH_OF_RADIUS,
+            crate::io::num(MAX_DEPTH_OF_RADIUS * radius * 1e3)
+        ));
+    }
+    let (p, dir) = (DVec3::from(at), DVec3::from(direction).normalize());
+    let under = inside_by(p);
+    if under > ON_SURFACE_M {
+        return Err(format!(
+            "the probe point {at:?} lies {} mm inside the tissue: a press starts on or outside its surface",
+            crate::io::num(under * 1e3)
+        ));
+    }
+    // The sphere at its depth must overlap the tissue.
+    let c = DVec3::from(centre(at, dir, radius, depth));
+    if depth > 0.0 && c.distance(c.clamp(DVec3::ZERO, DVec3::splat(CUBE_SIDE_M))) >= radius {
+        return Err(format!(
+            "the press does not enter the tissue: from {at:?} along {direction:?}, {} mm deep, the probe stays outside",
+            crate::io::num(depth * 1e3)
+        ));
+    }
+    if under > -ON_SURFACE_M && fixed(at) {
+        return Err(format!(
+            "the probe point {at:?} is on a clamped face: the support, not the material, would push back"
+        ));
+    }
+    let top = at[2] >= CUBE_SIDE_M - ON_SURFACE_M;
+    if surface && top {
+        let nodes = window_count(DEFAULT_DIVISIONS, centre(at, dir, radius, depth), radius);
+        if nodes > MAX_CONTACT_NODES {
+            return Err(format!(
+                "a probe of radius {} mm pressed {} mm is wider than the contact can hold: it covers {nodes} nodes \
+                 of the top face, above the bound of {MAX_CONTACT_NODES}",
+                crate::io::num(radius * 1e3),
+                crate::io::num(depth * 1e3)
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DOWN: [f64; 3] = [0.0, 0.0, -1.0];
+    const TOP: [f64; 3] = [0.05, 0.05, 0.1];
+
+    fn free(_: [f64; 3]) -> bool {
+        false
+    }
+
+    fn bottom(p: [f64; 3]) -> bool {
+        p[2] < 1e-9
+    }
+
+    #[test]
+    fn the_viewers_press_passes_and_each_limit_is_refused_with_its_reason() {
+        assert!(check(TOP, DOWN, 0.015, 0.004, true, &free).is_ok());
+        assert!(check(TOP, DOWN, 0.01, 0.006, true, &free).is_ok());
+        let refused = |at, dir, r, d, why: &str| {
+            let e = check(at, dir, r, d, true, &bottom).expect_err(why);
+            assert!(e.contains(why), "{e}");
+        };
+        refused(TOP, DOWN, 0.001, 0.0005, "smaller than the material's surface grid resolves");
+        refused(TOP, DOWN, 0.1, 0.004, "wider than the contact can hold");
+        refused(TOP, DOWN, 0.05, 0.02, "above the bound of");
+        refused(TOP, DOWN, 0.015, 0.016, "deeper than");
+        refused([0.05, 0.05, 0.09], DOWN, 0.015, 0.004, "inside the tissue");
+        refused(TOP, [0.0, 0.0, 1.0], 0.015, 0.004, "does not enter the tissue");
+        refused([0.05, 0.05, 0.12], DOWN, 0.015, 0.004, "does not enter the tissue");
+        refused([0.05, 0.05, 0.0], [0.0, 0.0, 1.0], 0.015, 0.004, "clamped face");
+        // Straight down at an edge: the sphere starts tangent there and enters.
+        assert!(check([0.0, 0.05, 0.1], DOWN, 0.015, 0.0025, true, &free).is_ok());
+        // An edge's normal is its faces' sum; the start is tangent there whatever the direction.
+        let edge = outward_normal([0.1, 0.05, 0.1]).expect("on the surface");
+        assert!((edge - DVec3::new(1.0, 0.0, 1.0).normalize()).length() < 1e-12);
+        let tilted = DVec3::new(0.3, 0.0, -1.0).normalize();
+        assert_eq!(centre(TOP, tilted, 0.015, 0.0), [0.05, 0.05, 0.115]);
+        assert!(outward_normal([0.05, 0.05, 0.12]).is_none());
+        // A touch of the deformed surface lands on the undeformed face nearest it.
+        let (at, n) = touch([0.05, 0.05, 0.097]);
+        assert_eq!((at, n), ([0.05, 0.05, 0.1], DVec3::Z));
+        assert_eq!(touch([0.0998, 0.05, 0.0999]).1, DVec3::new(1.0, 0.0, 1.0).normalize());
+        // The deepest press fits the contact: 3/4 of a 15 mm radius; less for 50 mm.
+        assert!((max_depth(0.015) - 0.01125).abs() < 1e-12);
+        let d = max_depth(0.05);
+        assert!(d < 0.0375 && d > 0.005 && check(TOP, DOWN, 0.05, d, true, &free).is_ok(), "{d}");
+        // A side face, and the bottom where nothing holds it, are pressed.
+        assert!(check([0.0, 0.05, 0.05], [1.0, 0.0, 0.0], 0.015, 0.004, true, &bottom).is_ok());
+        assert!(check([0.05, 0.05, 0.0], [0.0, 0.0, 1.0], 0.015, 0.004, true, &free).is_ok());
+    }
+}

@@ -1,0 +1,57 @@
+//! A press held is steady, by construction: the probe's contact is solved against the lag the
+//! material's modes reach at the tick's end under the force held, so the contact and the modes
+//! exchange no energy that is not there. Before, at 32 of 36 points of a grid over the top face
+//! the held force swung between 0 and 2.2 to 3.5 times its settled value.
+
+use tissue_sim::mechanics::material::Material;
+use tissue_sim::response::surface_compliance::ContactScratch;
+use tissue_sim::sim::surface_probe::load_or_compute;
+use tissue_sim::study::script::{Script, run};
+
+/// Holds a press for `hold_s` (eased in over 1 s, as a hand presses: with no damping at all, the modes a press excites ring on) and returns the force samples of the second
+/// half of the hold, newtons.
+fn held(at: [f64; 2], radius: f64, depth: f64, zeta: f64, hold_s: f64) -> Vec<f64> {
+    let [x, y] = at;
+    // The press eased in and out (smoothstep keys over 1 s), then held.
+    let mut keys: Vec<serde_json::Value> = (0..=20)
+        .map(|i| {
+            let u = f64::from(i) / 20.0;
+            serde_json::json!({ "t": u, "at": [x, y, 0.1], "depth": depth * u * u * (3.0 - 2.0 * u) })
+        })
+        .collect();
+    keys.push(serde_json::json!({ "t": 1.0 + hold_s, "at": [x, y, 0.1], "depth": depth }));
+    let script = serde_json::json!({
+        "object": "A", "dt": 1e-3, "damping_ratio": zeta,
+        "actions": [{ "probe_path": { "radius": radius, "direction": [0, 0, -1], "sample_hz": 100, "keys": keys } }]
+    });
+    let script: Script = serde_json::from_value(script).expect("a script");
+    let out = run(&script).expect("the hold runs");
+    let f: Vec<f64> = out.force_path.iter().map(|s| s.force_n).collect();
+    f[f.len() / 2..].to_vec()
+}
+
+#[test]
+fn a_held_press_is_steady_and_settles_to_the_materials_static_force() {
+    let material = Material::object_a();
+    let dir = tissue_sim::io::cache_dir();
+    let compliance = load_or_compute(&material, dir.as_deref(), &mut |_| true).expect("the surface compliance");
+    let mut scratch = ContactScratch::default();
+    let points = [[0.05, 0.05], [0.029, 0.0715], [0.015, 0.05], [0.085, 0.085], [0.043, 0.015]];
+    for (radius, depth) in [(0.015, 0.004), (0.01, 0.002)] {
+        for at in points {
+            let centre = [at[0], at[1], 0.1 + radius - depth];
+            let stat = compliance.press(centre, radius, &mut scratch).expect("a press")[2];
+            for zeta in [0.0, 0.05, 0.2, 1.0] {
+                let f = held(at, radius, depth, zeta, 4.0);
+                let mean = f.iter().sum::<f64>() / f.len() as f64;
+                let swing = f.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max) / mean;
+                let what = format!("{at:?}, radius {radius} m, depth {depth} m, damping ratio {zeta}");
+                // Undamped, the modes the press excites ring on (measured: up to 0.78 % at the
+                // corner with the 10 mm sphere); damped, they die out.
+                let bound = if zeta == 0.0 { 0.01 } else { 0.005 };
+                assert!(swing < bound, "{what}: the held force swings by {:.3} % of {mean} N", 100.0 * swing);
+                assert!((mean / stat - 1.0).abs() < 0.005, "{what}: held {mean} N against the static {stat} N");
+            }
+        }
+    }
+}

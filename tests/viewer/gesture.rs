@@ -1,0 +1,109 @@
+//! The viewer's probe gesture as a person makes it: pointer events at the default window (1280 x
+//! 720, the panel 380 px wide) and camera, the button pressed over the middle of the top face and
+//! moved 40 pixels down. The sphere starts tangent to the surface and goes in along its inward
+//! normal, 0.1 mm a pixel (before, it started along the view ray, already 10 mm under the top
+//! face at depth 0, and read 32.1 N where the material gives 9.7 N), and its force is the
+//! material's at that indentation.
+
+use egui::{Event, PointerButton, Pos2, RawInput, Rect};
+use tissue_sim::app::gestures::{Gesture, Scene, view_input};
+use tissue_sim::app::state::{Request, ToolKind};
+use tissue_sim::mechanics::grid::Grid;
+use tissue_sim::mechanics::material::Material;
+use tissue_sim::render::camera::OrbitCamera;
+use tissue_sim::render::mesh::SurfaceMesh;
+use tissue_sim::response::surface_compliance::ContactScratch;
+use tissue_sim::sim::Tool;
+use tissue_sim::validate::continuum::cache::ContinuumCache;
+use tissue_sim::validate::continuum::{DEFAULT_TOLERANCE, Press};
+
+const WINDOW: [f32; 2] = [1280.0, 720.0];
+const PANEL: f32 = 380.0;
+
+/// One frame of the 3D view with `events`, at `time` seconds.
+fn frame(
+    ctx: &egui::Context,
+    events: Vec<Event>,
+    time: f64,
+    state: (&mut OrbitCamera, &mut Gesture),
+    scene: &Scene<'_>,
+) -> Vec<Request> {
+    let (camera, gesture) = state;
+    let mut requests = Vec::new();
+    let raw = RawInput {
+        screen_rect: Some(Rect::from_min_size(Pos2::ZERO, egui::vec2(WINDOW[0], WINDOW[1]))),
+        events,
+        time: Some(time),
+        ..Default::default()
+    };
+    let _ = ctx.run_ui(raw, |ui| {
+        egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| {
+            let rect = Rect::from_min_max(Pos2::new(PANEL, 0.0), Pos2::new(WINDOW[0], WINDOW[1]));
+            let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+            view_input(&response, ui.ctx(), camera, gesture, scene, &mut requests);
+        });
+    });
+    requests
+}
+
+#[test]
+fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_materials_force() {
+    let grid = Grid::paper();
+    let mut mesh = SurfaceMesh::new(&grid);
+    let positions: Vec<[f32; 3]> = grid.positions().iter().map(|p| p.map(|v| v as f32)).collect();
+    mesh.update(&positions, None);
+    let radius_mm = 15.0;
+    let scene = Scene {
+        mesh: &mesh,
+        positions: &positions,
+        tool_force: [0.0; 3],
+        tool: ToolKind::Probe,
+        probe_radius_mm: radius_mm,
+        probe_along_view: false,
+    };
+    let mut camera = OrbitCamera::default();
+    let mut gesture = Gesture::None;
+    // The middle of the top face on the screen.
+    let aspect = (WINDOW[0] - PANEL) / WINDOW[1];
+    let clip = camera.view_proj(aspect) * glam::Vec4::new(0.05, 0.05, 0.1, 1.0);
+    let ndc = clip.truncate() / clip.w;
+    let p0 = Pos2::new(PANEL + 0.5 * (ndc.x + 1.0) * (WINDOW[0] - PANEL), 0.5 * (1.0 - ndc.y) * WINDOW[1]);
+    let ctx = egui::Context::default();
+    let press = |pressed: bool, pos: Pos2| Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
+    let mut t = 0.0;
+    let mut last = None;
+    let mut frames: Vec<Vec<Event>> = vec![vec![Event::PointerMoved(p0)], vec![press(true, p0)]];
+    frames.extend((1..=40).map(|k| vec![Event::PointerMoved(p0 + egui::vec2(0.0, k as f32))]));
+    for events in frames {
+        t += 0.02;
+        for r in frame(&ctx, events, t, (&mut camera, &mut gesture), &scene) {
+            if let Request::Tool(Tool::Probe { centre, radius }) = r {
+                last = Some((centre, radius));
+            }
+        }
+    }
+    let (centre, radius) = last.expect("the gesture pressed the probe");
+    assert_eq!(radius, radius_mm * 1e-3);
+    // Straight down along the top face's normal, from tangent: 40 pixels, 4 mm.
+    let at = [centre[0], centre[1], 0.1];
+    let depth = 0.1 + radius - centre[2];
+    assert!((depth - 0.004).abs() < 1e-6, "indentation {depth} m for 40 pixels");
+    assert!((at[0] - 0.05).abs() < 0.002 && (at[1] - 0.05).abs() < 0.002, "touched {at:?}");
+    // The force the viewer's contact gives there (the material's surface compliance, which a
+    // held press settles to) against the material's own.
+    let material = Material::object_a();
+    let dir = tissue_sim::io::cache_dir();
+    let compliance = tissue_sim::sim::surface_probe::load_or_compute(&material, dir.as_deref(), &mut |_| true)
+        .expect("the surface compliance");
+    let viewer = compliance.press(centre, radius, &mut ContactScratch::default()).expect("a press")[2];
+    let mut kept = ContinuumCache::open(&material, dir.as_deref());
+    let press = Press { at, radius, depth };
+    let truth = kept.force(&material, &press, DEFAULT_TOLERANCE, &mut |_| {}).expect("the material's force").force_n;
+    kept.save();
+    assert!((viewer / truth - 1.0).abs() < 0.07, "the viewer's {viewer} N against the material's {truth} N");
+}
