@@ -7,9 +7,10 @@
 //!
 //! With the material's lowest modes ([`ModalLag`]) the force is dynamic: the sphere meets the
 //! surface where the static answer puts it plus the lag of the slow modes behind their static
-//! values, found by a relaxed fixed point within the step (at most [`MAX_LAG_ITERATIONS`]
-//! presses, from the last step's lag), and the modes are then advanced over the step under the
-//! contact's forces.
+//! values at the end of the span the force is held over, with that force held (the step's modal
+//! response folded into the contact, so that the contact and the modes agree and a held press is
+//! steady), found by a relaxed fixed point (at most [`MAX_LAG_ITERATIONS`] presses, from the last
+//! solve's lag); the modes are then advanced exactly over the span under the contact's forces.
 
 use std::path::Path;
 use std::sync::Arc;
