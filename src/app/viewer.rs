@@ -15,7 +15,7 @@ use super::overlay::{ForceTrace, Overlay, Show, legend};
 use super::panel::study::StudyPanel;
 use super::panel::{self, PanelContext};
 use super::physics::{Command, PhysicsThread, Published};
-use super::state::{Request, ViewerState};
+use super::state::{Request, ToolKind, ViewerState};
 use super::stats::Stats;
 use super::surface::{CubeFrame, EguiFrame, Surface};
 use crate::render::camera::OrbitCamera;
@@ -51,6 +51,11 @@ struct App {
     cursor_moved: bool,
     /// The physics thread's message revision last drawn.
     drawn_revision: u64,
+    /// The window has had the keyboard focus (else, where no window manager gives it, the tool
+    /// keys are read raw while the pointer is over the window).
+    had_focus: bool,
+    /// The pointer is over the window.
+    pointer_inside: bool,
     error: Option<anyhow::Error>,
 }
 
@@ -108,6 +113,8 @@ impl App {
             input_until: None,
             cursor_moved: false,
             drawn_revision: 0,
+            had_focus: false,
+            pointer_inside: false,
             error: None,
         })
     }
@@ -343,6 +350,9 @@ impl ApplicationHandler<Wake> for App {
             self.frame_or_exit(event_loop);
         }
         match event {
+            WindowEvent::Focused(true) => self.had_focus = true,
+            WindowEvent::CursorEntered { .. } => self.pointer_inside = true,
+            WindowEvent::CursorLeft { .. } => self.pointer_inside = false,
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {
                 if let Some(s) = &mut self.surface {
@@ -356,6 +366,32 @@ impl ApplicationHandler<Wake> for App {
                 }
             }
             _ => {}
+        }
+    }
+
+    /// The tool keys (p, d, c) where no window manager ever gave the window the keyboard (a
+    /// virtual display): read raw while the pointer is over the window. With the focus, egui
+    /// reads them ([`super::panel`]).
+    fn device_event(
+        &mut self,
+        _event_loop: &ActiveEventLoop,
+        _id: winit::event::DeviceId,
+        event: winit::event::DeviceEvent,
+    ) {
+        use winit::keyboard::{KeyCode, PhysicalKey};
+        let winit::event::DeviceEvent::Key(key) = event else { return };
+        if self.had_focus || !self.pointer_inside || key.state != winit::event::ElementState::Pressed {
+            return;
+        }
+        let tool = match key.physical_key {
+            PhysicalKey::Code(KeyCode::KeyP) => ToolKind::Probe,
+            PhysicalKey::Code(KeyCode::KeyD) => ToolKind::Drag,
+            PhysicalKey::Code(KeyCode::KeyC) => ToolKind::Orbit,
+            _ => return,
+        };
+        self.state.settings.tool = tool;
+        if let Some(s) = &self.surface {
+            s.window.request_redraw();
         }
     }
 
@@ -386,6 +422,9 @@ pub fn run(options: super::ViewOptions) -> anyhow::Result<()> {
             super::HEADLESS_HINT
         )
     })?;
+    // Raw keys too, for the tool keys where no window manager gives the window the keyboard
+    // ([`App::device_event`]: only while the pointer is over a window never focused).
+    event_loop.listen_device_events(winit::event_loop::DeviceEvents::Always);
     let mut app = App::new(event_loop.create_proxy(), options)?;
     event_loop.run_app(&mut app).context("event loop failed")?;
     if let Some(e) = app.error.take() {
