@@ -180,18 +180,7 @@ impl ModalLag {
     /// The lag of the surface at the top-face point `(x, y)` behind its static answer under the
     /// contact set, metres.
     pub fn lag(&self, x: f64, y: f64) -> [f64; 3] {
-        let corners = self.basis.corners(x, y);
-        let mut out = [0.0; 3];
-        for (k, shape) in self.basis.shape.iter().enumerate() {
-            let w = self.basis.omega[k];
-            let behind = self.q[k] - self.force[k] / (w * w);
-            for &(t, wt) in &corners {
-                for c in 0..3 {
-                    out[c] += wt * shape[3 * t + c] * behind;
-                }
-            }
-        }
-        out
+        self.lag_after(x, y, 0.0)
     }
 
     /// The lag of the surface at the top-face point `(x, y)` behind its static answer at the end
