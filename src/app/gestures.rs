@@ -13,6 +13,7 @@
 
 use glam::Vec3;
 
+use crate::app::recording::Press;
 use crate::app::state::{Request, ToolKind};
 use crate::render::camera::OrbitCamera;
 use crate::render::mesh::SurfaceMesh;
@@ -157,10 +158,13 @@ pub fn view_input(
                     depth = (depth + (pos.y - last_y) * 1e-4).clamp(0.0, deepest);
                 }
                 *gesture = Gesture::Probe { contact, dir, last_y: pos.y, depth };
-                let radius = scene.probe_radius_mm * 1e-3;
-                let centre =
-                    crate::sim::press::centre(contact.as_dvec3().to_array(), dir.as_dvec3(), radius, f64::from(depth));
-                requests.push(Request::Tool(Tool::Probe { centre, radius }));
+                let press = Press {
+                    at: contact.as_dvec3().to_array(),
+                    direction: dir.as_dvec3().normalize().to_array().map(|v| v + 0.0),
+                    radius: scene.probe_radius_mm * 1e-3,
+                    depth: f64::from(depth),
+                };
+                requests.push(Request::Press(press));
                 // The force shown: the tissue's push on the sphere, the same number everywhere.
                 let force = glam::DVec3::from(scene.tool_force).length();
                 requests.push(Request::ForceSample([f64::from(depth) * 1e3, force]));

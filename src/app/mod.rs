@@ -3,6 +3,7 @@
 //! mechanics, io); the physics loop runs on its own thread, never in the UI.
 //!
 //! - [`viewer`]: the event loop and the frame; [`surface`]: the window and its wgpu surface.
+//! - [`recording`]: the hand's timeline in simulated time, and `view --record`.
 //! - [`state`]: the window-free viewer state, which turns [`state::Request`]s into physics
 //!   commands and background jobs, over what [`settings`] holds; [`panel`]: the side panel, a
 //!   file per section; [`gestures`]: mouse gestures; [`overlay`]: colour scalar, legend and
@@ -16,6 +17,7 @@ pub mod gestures;
 pub mod overlay;
 pub mod panel;
 pub mod physics;
+pub mod recording;
 pub mod settings;
 pub mod state;
 pub mod stats;
@@ -54,4 +56,7 @@ pub struct ViewOptions {
     pub compute: crate::gpu::Compute,
     /// Start with the probe pressed into the top face: `[x, y, depth]`, metres.
     pub press: Option<[f64; 3]>,
+    /// Record what is done and write it here as a `simulate` script (on closing, on SIGINT or
+    /// SIGTERM, and from the panel).
+    pub record: Option<std::path::PathBuf>,
 }

@@ -7,6 +7,7 @@ use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use super::recording::Timeline;
 use super::worker::{Context, State, Worker};
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::msm::MsmParams;
@@ -46,8 +47,12 @@ pub enum Command {
     SetIntegrator(Option<Integrator>, f64),
     /// The damping ratio at the fundamental (the policy then decides again).
     SetDampingRatio(f64),
-    /// The active tool.
+    /// The active tool: a drag target or nothing (a probe comes as [`Command::Press`]).
     SetTool(Tool),
+    /// The probe pressed (a mouse sample): the sphere glides there in simulated time.
+    Press(super::recording::Press),
+    /// Hand over what was recorded ([`super::recording::Timeline::recording`]).
+    TakeRecording(Sender<super::recording::Recording>),
     /// Clamp and load as a case, keeping the state.
     ApplyCase(LoadCase),
     /// Back to rest.
@@ -128,8 +133,9 @@ pub struct PhysicsThread {
 }
 
 impl PhysicsThread {
-    /// Starts the thread: it builds the first simulation from `first` and steps it.
-    pub fn spawn(first: Replacement) -> std::io::Result<Self> {
+    /// Starts the thread: it builds the first simulation from `first` and steps it, recording
+    /// what the hand does where `recording` ([`super::recording`]).
+    pub fn spawn(first: Replacement, recording: bool) -> std::io::Result<Self> {
         let (tx, rx) = channel();
         let shared = Arc::new(Mutex::new(Published::default()));
         let out = Arc::clone(&shared);
@@ -152,7 +158,7 @@ impl PhysicsThread {
                     }
                 };
                 // On the physics pool: each step's splits are then this thread's own tasks.
-                crate::mechanics::parallel::on_pool(move || run(sim, &rx, &out, ctx));
+                crate::mechanics::parallel::on_pool(move || run(sim, recording, &rx, &out, ctx));
             },
         )?;
         Ok(Self { tx, shared, worker })
@@ -190,38 +196,19 @@ struct Loop {
     owed: f64,
     /// The material's surface compliance for the probe, when the viewer has one.
     compliance: Option<crate::sim::surface_probe::MaterialSurface>,
-    /// The probe gliding to the last mouse sample.
-    glide: Option<Glide>,
+    /// What the hand does, in simulated time (and, recording, what it did).
+    timeline: Timeline,
     /// When the last tool command came.
     last_tool_at: Option<Instant>,
-}
-
-/// The probe's motion between two mouse samples: from where it is to the new sample, over the
-/// time between samples, so that it moves at the physics rate rather than once per frame.
-#[derive(Debug, Clone, Copy)]
-struct Glide {
-    from: [f64; 3],
-    to: [f64; 3],
-    radius: f64,
-    start: Instant,
-    duration: Duration,
 }
 
 /// A state that stays on the GPU between steps is brought back to draw at most this often
 /// (about 60 Hz), not every tick.
 const DRAW_PERIOD: Duration = Duration::from_millis(16);
 
-/// The longest glide: after a pause, the next sample is reached within this.
+/// The longest glide between two mouse samples: after a pause, the next sample is reached within
+/// this.
 const MAX_GLIDE: Duration = Duration::from_millis(50);
-
-impl Glide {
-    /// The probe now, and whether it has arrived.
-    fn at(&self, now: Instant) -> (Tool, bool) {
-        let f = ((now - self.start).as_secs_f64() / self.duration.as_secs_f64()).min(1.0);
-        let centre = std::array::from_fn(|c| self.from[c] + f * (self.to[c] - self.from[c]));
-        (Tool::Probe { centre, radius: self.radius }, f >= 1.0)
-    }
-}
 
 impl Loop {
     /// Brings a state that stays on the GPU back to draw, at most every [`DRAW_PERIOD`] (last at
@@ -261,40 +248,55 @@ impl Loop {
     fn apply(&mut self, sim: &mut Simulation, cmd: Command) {
         self.paused = false;
         match cmd {
-            Command::SetParams(p) => match sim.set_params(p) {
-                Ok(note) => self.note = note,
-                Err(e) => self.note = Some(format!("parameters refused: {e}")),
-            },
-            Command::SetIntegrator(i, dt) => self.note = sim.set_integrator(i, dt),
-            Command::SetDampingRatio(zeta) => match sim.set_damping_ratio(zeta) {
-                Ok(note) => self.note = note,
-                Err(e) => self.note = Some(format!("damping ratio refused: {e}")),
-            },
-            Command::SetTool(t) => {
-                let now = Instant::now();
-                match (sim.tool, t) {
-                    (Tool::Probe { centre: from, radius: r0 }, Tool::Probe { centre: to, radius }) if r0 == radius => {
-                        let since = self.last_tool_at.map_or(TICK, |t| now - t).clamp(TICK, MAX_GLIDE);
-                        self.glide = Some(Glide { from, to, radius, start: now, duration: since });
-                    }
-                    _ => {
-                        sim.tool = t;
-                        self.glide = None;
-                    }
+            Command::SetParams(p) => {
+                match sim.set_params(p) {
+                    Ok(note) => self.note = note,
+                    Err(e) => self.note = Some(format!("parameters refused: {e}")),
                 }
+                self.timeline.setting_changed(sim);
+            }
+            Command::SetIntegrator(i, dt) => {
+                self.note = sim.set_integrator(i, dt);
+                self.timeline.setting_changed(sim);
+            }
+            Command::SetDampingRatio(zeta) => {
+                match sim.set_damping_ratio(zeta) {
+                    Ok(note) => self.note = note,
+                    Err(e) => self.note = Some(format!("damping ratio refused: {e}")),
+                }
+                self.timeline.setting_changed(sim);
+            }
+            Command::SetTool(t) => {
+                self.timeline.set_tool(t, sim);
+                self.last_tool_at = Some(Instant::now());
+                self.tools += 1;
+            }
+            Command::Press(p) => {
+                // The sphere glides to the sample over the time since the last one (in
+                // simulated time: it moves at every step, as a script's path does).
+                let now = Instant::now();
+                let since = self.last_tool_at.map_or(TICK, |t| now - t).clamp(TICK, MAX_GLIDE);
+                self.timeline.press(p, since.as_secs_f64(), sim);
                 self.last_tool_at = Some(now);
                 self.tools += 1;
             }
-            Command::ApplyCase(c) => sim.apply_case(&c),
+            Command::TakeRecording(reply) => {
+                let _ = reply.send(self.timeline.recording(sim));
+            }
+            Command::ApplyCase(c) => {
+                sim.apply_case(&c);
+                self.timeline.setting_changed(sim);
+            }
             Command::Reset => {
                 sim.reset();
+                self.timeline.restart();
                 self.message = None;
             }
             Command::Replace(r) => match (r.recipe)() {
                 Ok(tissue) => {
                     *sim = Simulation::with_tissue(tissue, Integrator::Symplectic, r.dt, Some(&r.case));
                     self.attach_surface_probe(sim);
-                    self.glide = None;
+                    self.timeline.restart();
                     let note = sim.set_integrator(r.integrator, r.dt);
                     self.note = match (note, sim.tissue.computed_on()) {
                         (Some(n), Some(on)) => Some(format!("{n}; {on}")),
@@ -308,6 +310,7 @@ impl Loop {
             Command::SetSurfaceProbe(c) => {
                 self.compliance = c;
                 self.attach_surface_probe(sim);
+                self.timeline.setting_changed(sim);
             }
         }
     }
@@ -387,6 +390,7 @@ fn publish(sim: &Simulation, out: &Mutex<Published>, rates: Rates, state: &Loop,
 
 fn run(
     (mut sim, note): (Simulation, Option<String>),
+    recording: bool,
     rx: &Receiver<Command>,
     out: &Mutex<Published>,
     ctx: &Context<()>,
@@ -400,7 +404,7 @@ fn run(
         paused: false,
         owed: 0.0,
         compliance: None,
-        glide: None,
+        timeline: Timeline::new(recording),
         last_tool_at: None,
     };
     let (mut window_start, mut ticks, mut steps, mut busy) = (Instant::now(), 0u64, 0u64, Duration::ZERO);
@@ -419,18 +423,13 @@ fn run(
         // machine falls behind instead of spiralling.
         state.owed = (state.owed + TICK.as_secs_f64()).min(20.0 * TICK.as_secs_f64());
         let t0 = Instant::now();
-        if let Some(glide) = state.glide {
-            let (tool, arrived) = glide.at(t0);
-            sim.tool = tool;
-            if arrived {
-                state.glide = None;
-            }
-        }
         while !state.paused && state.owed >= sim.dt * 0.999 {
+            state.timeline.before_step(&mut sim);
             if let Err(b) = sim.step() {
                 state.blew_up(&b);
                 break;
             }
+            state.timeline.after_step(&sim);
             state.owed -= sim.dt;
             steps += 1;
             steps_total += 1;
@@ -438,6 +437,7 @@ fn run(
         if state.paused {
             state.owed = 0.0;
         }
+        state.timeline.tick(&sim);
         state.bring_back_to_draw(&mut sim, &mut drawn_at);
         busy += t0.elapsed();
         ticks += 1;

@@ -70,6 +70,8 @@ pub struct ViewSettings {
     pub nodes: usize,
     /// Where the model's steps are computed.
     pub compute: crate::gpu::Compute,
+    /// Where `view --record` writes the recording.
+    pub recording: Option<std::path::PathBuf>,
 }
 
 impl Default for ViewSettings {
@@ -78,7 +80,7 @@ impl Default for ViewSettings {
             object: Source::Object(crate::mechanics::object::Object::A),
             material_path: String::new(),
             tool: ToolKind::Drag,
-            probe_radius_mm: 15.0,
+            probe_radius_mm: crate::sim::press::DEFAULT_RADIUS_M * 1e3,
             probe_along_view: false,
             colour: ColourMode::Displacement,
             show_springs: false,
@@ -96,6 +98,7 @@ impl Default for ViewSettings {
             calib_cases: CaseSet::Touch,
             nodes: crate::mechanics::grid::Grid::paper().n(),
             compute: crate::gpu::Compute::Cpu,
+            recording: None,
         }
     }
 }

@@ -23,9 +23,14 @@ use crate::render::gpu::SurfaceStyle;
 use crate::render::mesh::SurfaceMesh;
 use crate::render::scene::ColourMode;
 
-/// A wake-up from a background thread (egui asked for a repaint).
+/// A wake-up from another thread.
 #[derive(Debug, Clone, Copy)]
-pub struct Wake;
+pub enum Wake {
+    /// egui asked for a repaint.
+    Repaint,
+    /// SIGINT or SIGTERM: close (writing the recording).
+    Quit,
+}
 
 struct App {
     surface: Option<Surface>,
@@ -61,17 +66,26 @@ struct App {
 
 impl App {
     fn new(proxy: EventLoopProxy<Wake>, options: super::ViewOptions) -> anyhow::Result<Self> {
-        let super::ViewOptions { frames: max_frames, screenshot, model, compute, press } = options;
+        let super::ViewOptions { frames: max_frames, screenshot, model, compute, press, record } = options;
+        if record.is_some() {
+            // The first SIGINT or SIGTERM closes the viewer as its window would, writing the
+            // recording; a second ends the process.
+            let quit = proxy.clone();
+            crate::io::on_interrupt(Box::new(move || {
+                let _ = quit.send_event(Wake::Quit);
+            }));
+        }
         let egui = egui::Context::default();
         let wake_proxy = proxy.clone();
         egui.set_request_repaint_callback(move |info| {
             // A delayed request is honoured by `about_to_wait`; only an immediate one wakes now.
             if info.delay <= Duration::from_millis(16) {
-                let _ = wake_proxy.send_event(Wake);
+                let _ = wake_proxy.send_event(Wake::Repaint);
             }
         });
         let repaint = egui.clone();
         let (mut state, first) = ViewerState::new(move || repaint.request_repaint())?;
+        state.settings.recording.clone_from(&record);
         // The model and compute asked for on the command line, as the panel would ask.
         let mut requests = Vec::with_capacity(16);
         state.settings.compute = compute;
@@ -84,13 +98,13 @@ impl App {
         if let Some([x, y, depth]) = press {
             // As the probe tool would press it, at the settings' radius.
             state.settings.tool = crate::app::state::ToolKind::Probe;
-            let r = state.settings.probe_radius_mm * 1e-3;
-            let top = crate::mechanics::grid::CUBE_SIDE_M;
-            requests.push(Request::Tool(crate::sim::Tool::Probe { centre: [x, y, top + r - depth], radius: r }));
+            let radius = state.settings.probe_radius_mm * 1e-3;
+            let at = [x, y, crate::mechanics::grid::CUBE_SIDE_M];
+            requests.push(Request::Press(super::recording::Press { at, direction: [0.0, 0.0, -1.0], radius, depth }));
         }
         let grid = state.grid();
         // The physics thread builds the model from its recipe: none is built here.
-        let physics = PhysicsThread::spawn(first).context("cannot start the physics thread")?;
+        let physics = PhysicsThread::spawn(first, record.is_some()).context("cannot start the physics thread")?;
         Ok(Self {
             surface: None,
             egui,
@@ -125,17 +139,27 @@ impl App {
         let stats = &mut self.stats;
         let mut dead = false;
         let mut send = |c: Command| {
-            if matches!(c, Command::SetTool(_)) {
+            if matches!(c, Command::SetTool(_) | Command::Press(_)) {
                 stats.sent();
             }
             dead |= physics.send(c).is_err();
         };
+        let mut save = false;
         for r in self.requests.drain(..) {
+            save |= r == Request::SaveRecording;
             self.state.handle(r, &mut send);
         }
         if dead && self.physics_stopped.is_none() {
             self.physics_stopped = Some("the physics thread has stopped; restart the viewer".into());
         }
+        if save {
+            self.state.shown.note = Some(self.save_recording().unwrap_or_else(|e| format!("{e:#}")));
+        }
+    }
+
+    /// Writes the recording (`view --record FILE`); says what it wrote.
+    fn save_recording(&self) -> anyhow::Result<String> {
+        super::recording::save(&self.physics, &self.state)
     }
 
     /// The egui pass: the panel and the 3D view's input.
@@ -323,8 +347,10 @@ impl ApplicationHandler<Wake> for App {
         }
     }
 
-    fn user_event(&mut self, _event_loop: &ActiveEventLoop, _event: Wake) {
-        if let Some(s) = &self.surface {
+    fn user_event(&mut self, event_loop: &ActiveEventLoop, event: Wake) {
+        if let Wake::Quit = event {
+            event_loop.exit();
+        } else if let Some(s) = &self.surface {
             s.window.request_redraw();
         }
     }
@@ -426,9 +452,15 @@ pub fn run(options: super::ViewOptions) -> anyhow::Result<()> {
     // ([`App::device_event`]: only while the pointer is over a window never focused).
     event_loop.listen_device_events(winit::event_loop::DeviceEvents::Always);
     let mut app = App::new(event_loop.create_proxy(), options)?;
-    event_loop.run_app(&mut app).context("event loop failed")?;
+    let ran = event_loop.run_app(&mut app).context("event loop failed");
+    // Closed, interrupted or failed: what was done is written first.
+    let saved = app.state.settings.recording.is_some().then(|| app.save_recording());
+    ran?;
     if let Some(e) = app.error.take() {
         return Err(e);
+    }
+    if let Some(said) = saved {
+        eprintln!("{}", said?);
     }
     if app.max_frames.is_some() {
         let p = &app.latest;

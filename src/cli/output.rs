@@ -38,7 +38,8 @@ pub fn progress_bar(len: u64, unit: &str) -> indicatif::ProgressBar {
 ///   Wayland probe of the Vulkan and GL drivers finds no display quietly instead of printing
 ///   "XDG_RUNTIME_DIR is invalid or not set" on every render;
 /// - SIGINT and SIGTERM remove the temporary outputs still being written
-///   ([`crate::io::remove_pending`]) and exit with status 130.
+///   ([`crate::io::remove_pending`]) and exit with status 130, unless the running command takes the
+///   first one itself ([`crate::io::on_interrupt`]: the viewer writes its recording and closes).
 pub fn prepare_process() {
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         // SAFETY: called first thing in `main`, before any other thread exists (the signal
@@ -46,7 +47,9 @@ pub fn prepare_process() {
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
     let _ = ctrlc::set_handler(|| {
-        crate::io::remove_pending();
-        std::process::exit(130);
+        if !crate::io::interrupt() {
+            crate::io::remove_pending();
+            std::process::exit(130);
+        }
     });
 }

@@ -42,8 +42,8 @@ pub struct ValidateArgs {
     /// How the probe touches in the presses against the material: `surface` (the viewer's: the
     /// material's surface compliance on a 2 mm grid of the top face, computed once per
     /// material, about a minute, and kept in the cache folder) or `nodes` (the model's surface nodes).
-    #[arg(long, value_parser = ["surface", "nodes"], default_value = "surface")]
-    pub contact: String,
+    #[arg(long, default_value = "surface")]
+    pub contact: crate::sim::press::Contact,
 }
 
 /// Scores the model against the same-mesh FEM and prints the report.
@@ -79,7 +79,7 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
     let reference = touch_score::Reference::new(&material, grid)?;
     let mut report = touch_score::evaluate(&reference, &material, model.0, model.1)
         .with_context(|| format!("scoring {} of material {}", model.0.name(), material.name))?;
-    let material = if own_mesh_only { None } else { Some(against_material(&material, grid, model, cache, &contact)?) };
+    let material = if own_mesh_only { None } else { Some(against_material(&material, grid, model, cache, contact)?) };
     if let Some(label) = label {
         report.object = label;
     }
@@ -111,7 +111,7 @@ fn against_material(
     grid: crate::mechanics::grid::Grid,
     model: (Model, Option<crate::mechanics::msm::MsmParams>),
     cache: Option<PathBuf>,
-    contact: &str,
+    contact: crate::sim::press::Contact,
 ) -> anyhow::Result<crate::validate::probe::score::MaterialReport> {
     use crate::validate::continuum::{self, cache as continuum_cache};
     use crate::validate::probe::score as probe_score;
@@ -121,7 +121,7 @@ fn against_material(
     let fem = Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear);
     let (mut own, _) = touch_score::responder(fem, None, material, grid)?;
     let start = std::time::Instant::now();
-    let mut model_force: Box<dyn FnMut(&continuum::Press) -> anyhow::Result<f64>> = if contact == "surface" {
+    let mut model_force: Box<dyn FnMut(&continuum::Press) -> anyhow::Result<f64>> = if contact == crate::sim::press::Contact::Surface {
         let mut report = crate::sim::surface_probe::stderr_report();
         let compliance =
             crate::sim::surface_probe::load_or_compute(material, dir.as_deref(), &mut |e| report.event(e))?;

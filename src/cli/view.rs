@@ -24,6 +24,11 @@ pub struct ViewArgs {
     /// screenshot): X and Y in 0..0.1, DEPTH in 0..0.02.
     #[arg(long, value_name = "X,Y,DEPTH", value_parser = parse_press)]
     pub press: Option<[f64; 3]>,
+    /// Record what is done and write it to FILE as a `simulate` script that replays it, with the
+    /// force samples shown under "recorded": when the viewer closes, on SIGINT or SIGTERM, and
+    /// from the panel's "Save recording".
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
 }
 
 fn parse_press(s: &str) -> Result<[f64; 3], String> {
@@ -48,11 +53,20 @@ fn parse_model(s: &str) -> Result<crate::sim::Model, String> {
 
 /// Opens the viewer.
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
+    if let Some(path) = &args.record {
+        crate::io::check_output(path)?;
+    }
     crate::app::run(crate::app::ViewOptions {
         frames: args.frames,
         screenshot: args.screenshot,
         model: args.model,
         compute: args.compute,
         press: args.press,
-    })
+        record: args.record,
+    })?;
+    if crate::io::interrupted() {
+        // Closed by SIGINT or SIGTERM, the recording written.
+        std::process::exit(130);
+    }
+    Ok(())
 }

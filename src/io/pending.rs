@@ -26,6 +26,39 @@ impl Drop for Pending {
     }
 }
 
+/// What takes the first SIGINT or SIGTERM instead of the exit (the viewer, to write its recording
+/// and close); a second signal exits.
+type Hook = Box<dyn Fn() + Send>;
+static HOOK: std::sync::Mutex<Option<Hook>> = std::sync::Mutex::new(None);
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Sets what the first SIGINT or SIGTERM calls instead of ending the process ([`interrupt`]).
+pub fn on_interrupt(hook: Hook) {
+    if let Ok(mut h) = HOOK.lock() {
+        *h = Some(hook);
+    }
+}
+
+/// What a signal handler calls first: `true` when a hook set by [`on_interrupt`] took the
+/// signal (the first one only), `false` when the process should end now.
+pub fn interrupt() -> bool {
+    if INTERRUPTED.swap(true, std::sync::atomic::Ordering::SeqCst) {
+        return false;
+    }
+    match HOOK.lock().ok().and_then(|mut h| h.take()) {
+        Some(hook) => {
+            hook();
+            true
+        }
+        None => false,
+    }
+}
+
+/// Whether a signal asked the process to end.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst)
+}
+
 /// Removes every temporary file and directory still being written: what a signal handler calls
 /// before the process exits (SIGINT, SIGTERM), so that an interrupted write leaves nothing behind.
 pub fn remove_pending() {

@@ -209,6 +209,21 @@ impl Grid {
         (0..m).flat_map(move |k| (0..m).flat_map(move |j| (0..m).map(move |i| self.element_nodes(i, j, k))))
     }
 
+    /// The grid columns `[i, j]` around `(x, y)` in a face plane (metres, clamped to the face)
+    /// and their bilinear weights: the one rule that spreads a point of the top face onto nodes.
+    pub fn face_corners(&self, x: f64, y: f64) -> [([usize; 2], f64); 4] {
+        let (n, h) = (self.n(), self.h());
+        let (u, v) = ((x / h).clamp(0.0, (n - 1) as f64), (y / h).clamp(0.0, (n - 1) as f64));
+        let (i, j) = ((u.floor() as usize).min(n - 2), (v.floor() as usize).min(n - 2));
+        let (fu, fv) = (u - i as f64, v - j as f64);
+        [
+            ([i, j], (1.0 - fu) * (1.0 - fv)),
+            ([i + 1, j], fu * (1.0 - fv)),
+            ([i, j + 1], (1.0 - fu) * fv),
+            ([i + 1, j + 1], fu * fv),
+        ]
+    }
+
     /// Nodes on the face `coordinate[axis] = 0` (`high = false`) or `= L` (`high = true`), in
     /// increasing index order. `axis` is 0-based.
     pub fn face_nodes(&self, axis: usize, high: bool) -> Vec<usize> {

@@ -22,6 +22,9 @@ pub enum SparseError {
     /// The matrix is not numerically positive definite.
     #[error("matrix is not positive definite (Cholesky factorisation failed)")]
     NotPositiveDefinite,
+    /// A contact solved on the system did not settle (`response::contact`).
+    #[error("{0}")]
+    Contact(String),
     /// [`SpdSystem::solve_in_place`] was called before a successful [`SpdSystem::factor`].
     #[error("solve called before a successful factorisation")]
     NotFactored,

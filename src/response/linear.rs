@@ -12,6 +12,8 @@ use crate::mechanics::msm::{MsmModel, MsmParams, Topology};
 use crate::mechanics::sparse::{SparseError, SpdSystem};
 use glam::DVec3;
 
+use super::contact;
+
 /// Parameter groups of a spring lattice, in this order.
 pub const GROUP_NAMES: [&str; 7] = ["k1", "k2", "k3", "c12", "c13", "c23", "b"];
 
@@ -167,8 +169,6 @@ impl ProbeAnswer {
     }
 }
 
-/// Active-set iterations of the contact solve.
-const MAX_CONTACT_ITERATIONS: usize = 50;
 
 impl SceneSolver {
     /// The pattern of `k` on the scene (factorise with [`SceneSolver::factor`]).
@@ -212,7 +212,7 @@ impl SceneSolver {
         // Contact is with the surface: interior nodes never touch the sphere.
         let free_nodes: Vec<bool> = (0..nn).map(|p| !self.fixed[3 * p] && grid.on_boundary(p)).collect();
         let zero = vec![0.0; 3 * nn];
-        let ContactSolve { u, solved, lambda, columns, chol } =
+        let ContactSolve { u, solved, lambda, columns, mut scratch } =
             contact_active_set(&mut |w| self.solve(w), &zero, &geometry, &free_nodes, radius)?;
         let mut force = [0.0; 3];
         for (&p, &l) in solved.iter().zip(&lambda) {
@@ -220,23 +220,14 @@ impl SceneSolver {
                 force[c] -= l * geometry[p].0[c];
             }
         }
-        let sensitivity = probe_sensitivity(&force, &solved, &geometry, &columns, chol.as_ref(), 3 * nn);
+        let sensitivity = probe_sensitivity(&force, &solved, &geometry, &columns, &mut scratch, 3 * nn);
         Ok(ProbeAnswer { u, force, contacts: solved.into_iter().zip(lambda).collect(), sensitivity })
     }
 }
 
-/// Where a sphere meets each node of `grid` at rest: the outward normal from `centre` and the
-/// node's depth inside the sphere (`radius - distance`; negative outside).
+/// Where a sphere meets each node of `grid` at rest ([`contact::sphere_gap`]).
 pub fn sphere_geometry(grid: &Grid, centre: [f64; 3], radius: f64) -> Vec<([f64; 3], f64)> {
-    (0..grid.num_nodes())
-        .map(|p| {
-            let x = grid.position(p);
-            let d = [x[0] - centre[0], x[1] - centre[1], x[2] - centre[2]];
-            let dist = DVec3::from(d).length();
-            let n = if dist > 1e-12 { d.map(|c| c / dist) } else { [0.0, 0.0, 1.0] };
-            (n, radius - dist)
-        })
-        .collect()
+    (0..grid.num_nodes()).map(|p| contact::sphere_gap(centre, radius, grid.position(p), [0.0, 0.0, 1.0])).collect()
 }
 
 /// The last solved contact set of [`contact_active_set`].
@@ -250,14 +241,45 @@ pub struct ContactSolve {
     pub lambda: Vec<f64>,
     /// Their unit-normal-force responses (`K^-1 n_p`), all dofs.
     pub columns: Vec<Vec<f64>>,
-    /// The Cholesky factor of their normal compliance (none without contact).
-    pub chol: Option<nalgebra::Cholesky<f64, nalgebra::Dyn>>,
+    /// The contact's memory, holding the factorised normal compliance of the contact nodes.
+    pub scratch: contact::ContactScratch,
 }
 
-/// Frictionless linearised node contact with an active set: starting from the unconstrained
-/// answer `base` of a system whose solve is `solve`, every node in contact is put on the sphere
-/// (`n_p . u_p = g_p`, `geometry` as [`sphere_geometry`]) by normal forces from the Schur
-/// complement of the contact nodes, until no contact pulls and no `free` node ends inside.
+/// A factorised system's nodes as the contact sees them: unit normal-force responses solved once
+/// per node, on demand.
+struct NodeBody<'a> {
+    solve: &'a mut dyn FnMut(&mut [f64]) -> Result<(), SparseError>,
+    /// Node of each candidate.
+    nodes: &'a [usize],
+    geometry: &'a [([f64; 3], f64)],
+    dofs: usize,
+    /// Per candidate solved: `K^-1 n_p`, all dofs.
+    columns: std::collections::HashMap<usize, Vec<f64>>,
+}
+
+impl contact::Compliance for NodeBody<'_> {
+    fn prepare(&mut self, slots: &[usize]) -> Result<(), contact::ContactError> {
+        for &s in slots {
+            if let std::collections::hash_map::Entry::Vacant(e) = self.columns.entry(s) {
+                let p = self.nodes[s];
+                let mut w = vec![0.0; self.dofs];
+                w[3 * p..3 * p + 3].copy_from_slice(&self.geometry[p].0);
+                (self.solve)(&mut w).map_err(|e| contact::ContactError::Body(e.to_string()))?;
+                e.insert(w);
+            }
+        }
+        Ok(())
+    }
+
+    fn normal(&self, i: usize, n_i: [f64; 3], j: usize, _: [f64; 3]) -> f64 {
+        let (p, col) = (self.nodes[i], &self.columns[&j]);
+        (0..3).map(|c| n_i[c] * col[3 * p + c]).sum()
+    }
+}
+
+/// Frictionless linearised node contact ([`contact::solve`]) on a system whose solve is `solve`,
+/// from its unconstrained answer `base`: every `free` node in contact is put on the sphere
+/// (`n_p . u_p = g_p`, `geometry` as [`sphere_geometry`]).
 pub fn contact_active_set(
     solve: &mut dyn FnMut(&mut [f64]) -> Result<(), SparseError>,
     base: &[f64],
@@ -265,55 +287,28 @@ pub fn contact_active_set(
     free: &[bool],
     radius: f64,
 ) -> Result<ContactSolve, SparseError> {
-    let nn = geometry.len();
-    let normal_u = |u: &[f64], p: usize| (0..3).map(|c| geometry[p].0[c] * u[3 * p + c]).sum::<f64>();
-    let mut active: Vec<usize> = (0..nn).filter(|&p| free[p] && geometry[p].1 - normal_u(base, p) > 0.0).collect();
+    let nodes: Vec<usize> = (0..geometry.len()).filter(|&p| free[p]).collect();
+    let mut scratch = contact::ContactScratch::default();
+    scratch.candidates.extend(nodes.iter().map(|&p| {
+        let (n, depth) = geometry[p];
+        (n, depth - (0..3).map(|c| n[c] * base[3 * p + c]).sum::<f64>())
+    }));
+    let mut body = NodeBody { solve, nodes: &nodes, geometry, dofs: base.len(), columns: Default::default() };
+    contact::solve(&mut body, &mut scratch, 1e-12 * radius).map_err(|e| match e {
+        contact::ContactError::NotPositiveDefinite => SparseError::NotPositiveDefinite,
+        e => SparseError::Contact(e.to_string()),
+    })?;
     let mut u = base.to_vec();
-    // Unit normal-force responses, solved once per node.
-    let mut responses: std::collections::HashMap<usize, Vec<f64>> = std::collections::HashMap::new();
-    let mut out =
-        ContactSolve { u: Vec::new(), solved: Vec::new(), lambda: Vec::new(), columns: Vec::new(), chol: None };
-    for _ in 0..MAX_CONTACT_ITERATIONS {
-        u.copy_from_slice(base);
-        out.solved.clone_from(&active);
-        out.lambda.clear();
-        out.chol = None;
-        if active.is_empty() {
-            break;
+    let mut columns = Vec::with_capacity(scratch.active.len());
+    for (&s, &l) in scratch.active.iter().zip(&scratch.lambda) {
+        let col = body.columns.remove(&s).unwrap_or_default();
+        for (ud, wd) in u.iter_mut().zip(&col) {
+            *ud += l * wd;
         }
-        for &p in &active {
-            if let std::collections::hash_map::Entry::Vacant(e) = responses.entry(p) {
-                let mut w = vec![0.0; base.len()];
-                w[3 * p..3 * p + 3].copy_from_slice(&geometry[p].0);
-                solve(&mut w)?;
-                e.insert(w);
-            }
-        }
-        let m = active.len();
-        let s = nalgebra::DMatrix::from_fn(m, m, |i, j| normal_u(&responses[&active[j]], active[i]));
-        let g = nalgebra::DVector::from_iterator(m, active.iter().map(|&p| geometry[p].1 - normal_u(base, p)));
-        let factor = s.cholesky().ok_or(SparseError::NotPositiveDefinite)?;
-        out.lambda.extend(factor.solve(&g).iter().copied());
-        out.chol = Some(factor);
-        for (&p, &l) in active.iter().zip(&out.lambda) {
-            for (ud, wd) in u.iter_mut().zip(&responses[&p]) {
-                *ud += l * wd;
-            }
-        }
-        // Keep pushing contacts; add free nodes that end inside the sphere.
-        let mut next: Vec<usize> = active.iter().zip(&out.lambda).filter(|(_, l)| **l > 0.0).map(|(p, _)| *p).collect();
-        next.extend(
-            (0..nn).filter(|&p| free[p] && !active.contains(&p) && normal_u(&u, p) < geometry[p].1 - 1e-12 * radius),
-        );
-        next.sort_unstable();
-        if next == active {
-            break;
-        }
-        active = next;
+        columns.push(col);
     }
-    out.columns = out.solved.iter().map(|p| responses.remove(p).unwrap_or_default()).collect();
-    out.u = u;
-    Ok(out)
+    let solved = scratch.active.iter().map(|&s| nodes[s]).collect();
+    Ok(ContactSolve { u, solved, lambda: scratch.lambda.clone(), columns, scratch })
 }
 
 /// The adjoint of the probe force's magnitude with the contact set held: `d|F| = -w^T dK u`
@@ -323,19 +318,15 @@ fn probe_sensitivity(
     solved: &[usize],
     geometry: &[([f64; 3], f64)],
     columns: &[Vec<f64>],
-    chol: Option<&nalgebra::Cholesky<f64, nalgebra::Dyn>>,
+    scratch: &mut contact::ContactScratch,
     dofs: usize,
 ) -> Vec<f64> {
     let mut sensitivity = vec![0.0; dofs];
     let magnitude = DVec3::from(*force).length();
-    if let Some(factor) = chol
-        && magnitude > 0.0
-    {
-        let b = nalgebra::DVector::from_iterator(
-            solved.len(),
-            solved.iter().map(|&p| (0..3).map(|c| force[c] * geometry[p].0[c]).sum::<f64>() / magnitude),
-        );
-        let mu = factor.solve(&b);
+    if !solved.is_empty() && magnitude > 0.0 {
+        let mut mu: Vec<f64> =
+            solved.iter().map(|&p| (0..3).map(|c| force[c] * geometry[p].0[c]).sum::<f64>() / magnitude).collect();
+        scratch.solve_factored(&mut mu);
         for (col, m) in columns.iter().zip(mu.iter()) {
             for (s, w) in sensitivity.iter_mut().zip(col) {
                 *s += m * w;

@@ -1,8 +1,10 @@
 //! Layer 2, the linear response shared by calibration, validation, dynamics and the simulation:
 //! what a model does at rest, in small displacements, on the viewer's scene (face z = 0 clamped).
 //!
+//! - [`contact`]: the one contact of a rigid sphere with surface nodes (an active set over any
+//!   [`contact::Compliance`]), and the sphere's gap.
 //! - [`linear`]: a lattice's stiffness as a sum over spring groups, the scene's sparse solver, the
-//!   probe's sphere geometry and its active-set contact solve.
+//!   probe on it (node contact through [`contact`]).
 //! - [`modes`]: the lowest natural modes of a scene solver; [`modal`]: a model's rest stiffness
 //!   and lumped masses, its modes on any clamp.
 //! - [`stiffest_mode`]: the largest eigenvalue of `M^-1 K` (Lanczos), with an upper estimate
@@ -16,6 +18,7 @@
 //! [`surface_compliance`]: the top face's contact compliance of a fine FEM, the probe's force from
 //! the material.
 
+pub mod contact;
 pub mod damping;
 pub mod linear;
 pub mod modal;

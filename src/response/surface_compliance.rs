@@ -9,10 +9,9 @@
 //! `y -> L - y`, so only the columns of one quadrant's nodes are computed and kept. The contact
 //! solve ([`SurfaceCompliance::press`]) allocates nothing: it works in a [`ContactScratch`].
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt;
-use faer::{Conj, MatMut, Par};
 use glam::DVec3;
+
+use super::contact;
 
 use crate::mechanics::fem::graded::{GradedFem, GradedMesh, graded_axis};
 use crate::mechanics::grid::CUBE_SIDE_M;
@@ -32,8 +31,6 @@ const GROWTH: f64 = 1.45;
 const BATCH_NODES: usize = 16;
 /// Most face nodes one contact may involve (the window under the sphere).
 pub const MAX_CONTACT_NODES: usize = 600;
-/// Active-set iterations of one contact solve.
-const MAX_CONTACT_ITERATIONS: usize = 30;
 
 /// The top face's compliance at the nodes of a uniform face grid.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,12 +53,9 @@ pub enum ComplianceError {
     /// More face nodes under the sphere than [`MAX_CONTACT_NODES`].
     #[error("the sphere covers {0} nodes of the face, above the bound of {MAX_CONTACT_NODES}")]
     TooLarge(usize),
-    /// The active set did not settle within its iterations.
-    #[error("the contact did not settle in {0} active-set iterations")]
-    NotSettled(usize),
-    /// The contact compliance lost positive definiteness.
-    #[error("the contact compliance is not positive definite")]
-    NotPositiveDefinite,
+    /// The contact solve failed (not settled, not positive definite).
+    #[error(transparent)]
+    Contact(#[from] contact::ContactError),
     /// A kept file does not match.
     #[error("surface compliance file: {0}")]
     File(String),
@@ -199,114 +193,48 @@ impl SurfaceCompliance {
 
     /// The force of the face on a rigid frictionless sphere (`centre`, `radius`, metres) held
     /// against it at rest, newtons: every face node the sphere covers is put on it along the
-    /// sphere's normal (linearised), with an active set so that no contact pulls and no covered
-    /// node ends inside. The contact nodes and their normal forces stay in `scratch`.
+    /// sphere's normal ([`contact::solve`], warm-started from the last solve's contact where it
+    /// is still near the sphere). The contact nodes and their normal forces stay in `scratch`.
     pub fn press(
         &self,
         centre: [f64; 3],
         radius: f64,
         scratch: &mut ContactScratch,
     ) -> Result<[f64; 3], ComplianceError> {
-        scratch.window.clear();
-        scratch.active.clear();
+        let ContactScratch { contact: c, nodes, previous } = scratch;
+        c.candidates.clear();
+        c.active.clear();
+        c.lambda.clear();
+        nodes.clear();
         if centre[2] - radius >= CUBE_SIDE_M {
+            previous.clear();
             return Ok([0.0; 3]);
         }
         let mut too_large = false;
         for_window(self.divisions, centre, radius, |q, d| {
-            if scratch.window.len() == MAX_CONTACT_NODES {
+            if nodes.len() == MAX_CONTACT_NODES {
                 too_large = true;
                 return false;
             }
-            let dist = d.length();
-            let n = if dist > 1e-12 { d / dist } else { DVec3::NEG_Z };
-            scratch.window.push((q, n.to_array(), radius - dist));
+            nodes.push(q);
+            let x = (DVec3::from(centre) + d).to_array();
+            c.candidates.push(contact::sphere_gap(centre, radius, x, [0.0, 0.0, -1.0]));
             true
         });
         if too_large {
             return Err(ComplianceError::TooLarge(window_count(self.divisions, centre, radius)));
         }
-        self.warm_start(scratch);
-        let mut settled = false;
-        for _ in 0..MAX_CONTACT_ITERATIONS {
-            let m = scratch.active.len();
-            if m == 0 {
-                settled = true;
-                break;
-            }
-            self.solve_active(scratch)?;
-            // Keep pushing contacts; add window nodes that end inside the sphere.
-            scratch.next.clear();
-            for (k, &w) in scratch.active.iter().enumerate() {
-                if scratch.lambda[k] > 0.0 {
-                    scratch.next.push(w);
-                }
-            }
-            let tol = 1e-9 * radius;
-            for w in 0..scratch.window.len() {
-                if scratch.active.contains(&w) {
-                    continue;
-                }
-                let (q, nq, gap) = scratch.window[w];
-                let un = self.normal_displacement(scratch, q, nq);
-                if un < gap - tol {
-                    scratch.next.push(w);
-                }
-            }
-            scratch.next.sort_unstable();
-            if scratch.next == scratch.active {
-                settled = true;
-                break;
-            }
-            std::mem::swap(&mut scratch.next, &mut scratch.active);
-        }
-        if !settled {
-            // The forces solved last belong to the set before the swap: none of them is used.
-            scratch.active.clear();
-            scratch.lambda.clear();
-            scratch.previous.clear();
-            return Err(ComplianceError::NotSettled(MAX_CONTACT_ITERATIONS));
-        }
-        if scratch.active.is_empty() {
-            scratch.lambda.clear();
-        }
-        scratch.previous.clear();
-        for &w in &scratch.active {
-            scratch.previous.push(scratch.window[w].0);
-        }
-        scratch.previous.sort_unstable();
-        let mut force = DVec3::ZERO;
-        for (k, &w) in scratch.active.iter().enumerate() {
-            force -= DVec3::from(scratch.window[w].1) * scratch.lambda[k];
-        }
-        Ok(force.to_array())
-    }
-
-    /// The first active set: the face nodes in contact at the last solve, where it touched; else
-    /// every node inside the sphere.
-    fn warm_start(&self, scratch: &mut ContactScratch) {
-        for (w, &(q, _, gap)) in scratch.window.iter().enumerate() {
-            if scratch.previous.binary_search(&q).is_ok() && gap > -self.spacing() {
-                scratch.active.push(w);
+        for (w, &q) in nodes.iter().enumerate() {
+            if previous.binary_search(&q).is_ok() && c.candidates[w].1 > -self.spacing() {
+                c.active.push(w);
             }
         }
-        if scratch.active.is_empty() {
-            for (w, &(_, _, gap)) in scratch.window.iter().enumerate() {
-                if gap > 0.0 {
-                    scratch.active.push(w);
-                }
-            }
-        }
-    }
-
-    /// Normal displacement of face node `q` (normal `nq`) under the active contact forces.
-    fn normal_displacement(&self, scratch: &ContactScratch, q: usize, nq: [f64; 3]) -> f64 {
-        let mut un = 0.0;
-        for (k, &w) in scratch.active.iter().enumerate() {
-            let (p, np, _) = scratch.window[w];
-            un += scratch.lambda[k] * self.normal_normal(p, np, q, nq);
-        }
-        un
+        let solved = contact::solve(&mut FaceNodes { compliance: self, nodes }, c, 1e-9 * radius);
+        previous.clear();
+        solved?;
+        previous.extend(c.active.iter().map(|&w| nodes[w]));
+        previous.sort_unstable();
+        Ok(c.force())
     }
 
     /// `nq . W(q <- p) np`.
@@ -318,46 +246,18 @@ impl SurfaceCompliance {
         }
         v
     }
+}
 
-    /// Solves the active contacts' normal forces into `scratch.lambda`.
-    fn solve_active(&self, scratch: &mut ContactScratch) -> Result<(), ComplianceError> {
-        let m = scratch.active.len();
-        let ContactScratch { window, active, lambda, matrix, stack, .. } = scratch;
-        matrix.resize(m * m, 0.0);
-        lambda.clear();
-        for (j, &wj) in active.iter().enumerate() {
-            let (p, np, _) = window[wj];
-            for (i, &wi) in active.iter().enumerate() {
-                let (q, nq, _) = window[wi];
-                matrix[i + m * j] = self.normal_normal(p, np, q, nq);
-            }
-            lambda.push(window[wj].2);
-        }
-        // Symmetrise (the f32 columns are symmetric only to their rounding).
-        for j in 0..m {
-            for i in 0..j {
-                let v = 0.5 * (matrix[i + m * j] + matrix[j + m * i]);
-                matrix[i + m * j] = v;
-                matrix[j + m * i] = v;
-            }
-        }
-        let mut a = MatMut::from_column_major_slice_mut(&mut matrix[..m * m], m, m);
-        llt::factor::cholesky_in_place(
-            a.as_mut(),
-            Default::default(),
-            Par::Seq,
-            MemStack::new(stack),
-            Default::default(),
-        )
-        .map_err(|_| ComplianceError::NotPositiveDefinite)?;
-        llt::solve::solve_in_place_with_conj(
-            a.as_ref(),
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut lambda[..m], m, 1),
-            Par::Seq,
-            MemStack::new(stack),
-        );
-        Ok(())
+/// The face nodes under the sphere as the contact sees them.
+struct FaceNodes<'a> {
+    compliance: &'a SurfaceCompliance,
+    /// Face node of each candidate.
+    nodes: &'a [usize],
+}
+
+impl contact::Compliance for FaceNodes<'_> {
+    fn normal(&self, i: usize, n_i: [f64; 3], j: usize, n_j: [f64; 3]) -> f64 {
+        self.compliance.normal_normal(self.nodes[j], n_j, self.nodes[i], n_i)
     }
 }
 
@@ -393,36 +293,36 @@ pub fn window_count(divisions: usize, centre: [f64; 3], radius: f64) -> usize {
 
 /// Preallocated memory of [`SurfaceCompliance::press`].
 pub struct ContactScratch {
-    /// Face nodes near the sphere: node, outward normal from the centre, depth inside the sphere.
-    pub window: Vec<(usize, [f64; 3], f64)>,
-    /// Window indices in contact.
-    pub active: Vec<usize>,
-    /// Their normal forces, newtons.
-    pub lambda: Vec<f64>,
-    next: Vec<usize>,
+    /// The contact's memory: the face nodes near the sphere as candidates (outward normal from
+    /// the centre, depth inside the sphere), those in contact and their normal forces.
+    pub contact: contact::ContactScratch,
+    /// The face node of each candidate.
+    pub nodes: Vec<usize>,
+    /// The face nodes in contact at the last solve, increasing (the next solve's warm start).
     previous: Vec<usize>,
-    matrix: Vec<f64>,
-    stack: MemBuffer,
+}
+
+impl ContactScratch {
+    /// The contact of the last press: face node, outward normal, normal force (newtons).
+    pub fn contacts(&self) -> impl Iterator<Item = (usize, [f64; 3], f64)> + '_ {
+        let c = &self.contact;
+        c.active.iter().zip(&c.lambda).map(|(&w, &l)| (self.nodes[w], c.candidates[w].0, l))
+    }
 }
 
 impl std::fmt::Debug for ContactScratch {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("ContactScratch").field("active", &self.active.len()).finish()
+        f.debug_struct("ContactScratch").field("active", &self.contact.active.len()).finish()
     }
 }
 
 impl Default for ContactScratch {
     fn default() -> Self {
         let m = MAX_CONTACT_NODES;
-        let req = llt::factor::cholesky_in_place_scratch::<f64>(m, Par::Seq, Default::default());
         Self {
-            window: Vec::with_capacity(m),
-            active: Vec::with_capacity(m),
-            lambda: Vec::with_capacity(m),
-            next: Vec::with_capacity(m),
+            contact: contact::ContactScratch::with_room(m),
+            nodes: Vec::with_capacity(m),
             previous: Vec::with_capacity(m),
-            matrix: Vec::with_capacity(m * m),
-            stack: MemBuffer::new(req),
         }
     }
 }

@@ -92,16 +92,8 @@ impl ModalBasis {
 
     /// Top-face nodes (index `i + n j`) around `(x, y)` and their bilinear weights.
     fn corners(&self, x: f64, y: f64) -> [(usize, f64); 4] {
-        let (n, h) = (self.grid.n(), self.grid.h());
-        let (u, v) = ((x / h).clamp(0.0, (n - 1) as f64), (y / h).clamp(0.0, (n - 1) as f64));
-        let (i, j) = ((u.floor() as usize).min(n - 2), (v.floor() as usize).min(n - 2));
-        let (fu, fv) = (u - i as f64, v - j as f64);
-        [
-            (i + n * j, (1.0 - fu) * (1.0 - fv)),
-            (i + 1 + n * j, fu * (1.0 - fv)),
-            (i + n * (j + 1), (1.0 - fu) * fv),
-            (i + 1 + n * (j + 1), fu * fv),
-        ]
+        let n = self.grid.n();
+        self.grid.face_corners(x, y).map(|([i, j], w)| (i + n * j, w))
     }
 }
 

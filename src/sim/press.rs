@@ -20,6 +20,9 @@ use crate::mechanics::grid::CUBE_SIDE_M;
 pub use crate::response::surface_compliance::MAX_CONTACT_NODES;
 use crate::response::surface_compliance::{DEFAULT_DIVISIONS, window_count};
 
+/// The probe's radius unless one is asked for (the viewer's, the touch benchmark's), metres.
+pub const DEFAULT_RADIUS_M: f64 = 0.015;
+
 /// The smallest probe radius, metres: 2.5 nodes of the surface grid.
 pub const MIN_RADIUS_M: f64 = 0.005;
 /// The largest probe radius, metres.
@@ -179,6 +182,45 @@ pub fn check(
         }
     }
     Ok(())
+}
+
+/// How the probe touches the tissue: the one name of the contact in scripts, flags and reports.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Contact {
+    /// The material's surface compliance on a fine grid of the top face
+    /// ([`crate::sim::surface_probe`]); elsewhere, the model's surface nodes.
+    #[default]
+    Surface,
+    /// The running model's surface nodes, projected out of the sphere.
+    Nodes,
+}
+
+impl Contact {
+    /// The contact that produced the simulation's last probe force.
+    pub fn of(sim: &super::Simulation) -> Self {
+        if sim.probe_on_surface() { Contact::Surface } else { Contact::Nodes }
+    }
+
+    /// `surface` or `nodes`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Contact::Surface => "surface",
+            Contact::Nodes => "nodes",
+        }
+    }
+}
+
+impl std::str::FromStr for Contact {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "surface" => Ok(Contact::Surface),
+            "nodes" => Ok(Contact::Nodes),
+            _ => Err(format!("unknown contact \"{s}\" (surface or nodes)")),
+        }
+    }
 }
 
 #[cfg(test)]

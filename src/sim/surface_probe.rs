@@ -151,10 +151,9 @@ impl SurfaceProbe {
             self.press(std::array::from_fn(|c| centre[c] - d[c]), radius)?;
             let Some(lag) = self.lag.as_mut() else { break };
             let (scratch, compliance) = (&self.scratch, &self.compliance);
-            lag.set_contact(scratch.active.iter().zip(&scratch.lambda).map(|(&w, &lambda)| {
-                let (q, normal, _) = scratch.window[w];
-                (compliance.position(q), normal.map(|c| c * lambda))
-            }));
+            lag.set_contact(
+                scratch.contacts().map(|(q, normal, lambda)| (compliance.position(q), normal.map(|c| c * lambda))),
+            );
             let g = lag.lag_after(x, y, span);
             let r: [f64; 3] = std::array::from_fn(|c| g[c] - d[c]);
             if r.iter().all(|v| v.abs() < LAG_TOLERANCE_M) {
@@ -184,20 +183,13 @@ impl SurfaceProbe {
     fn press(&mut self, centre: [f64; 3], radius: f64) -> Result<(), ComplianceError> {
         self.force = self.compliance.press(centre, radius, &mut self.scratch)?;
         self.loads.clear();
-        let h = self.grid.h();
         let n = self.grid.n();
-        for (k, &w) in self.scratch.active.iter().enumerate() {
-            let (q, normal, _) = self.scratch.window[w];
+        for (q, normal, lambda) in self.scratch.contacts() {
             let x = self.compliance.position(q);
-            let f = normal.map(|c| c * self.scratch.lambda[k]);
-            let (u, v) = (x[0] / h, x[1] / h);
-            let (i, j) = ((u.floor() as usize).min(n - 2), (v.floor() as usize).min(n - 2));
-            let (fu, fv) = (u - i as f64, v - j as f64);
-            for (di, dj, wgt) in
-                [(0, 0, (1.0 - fu) * (1.0 - fv)), (1, 0, fu * (1.0 - fv)), (0, 1, (1.0 - fu) * fv), (1, 1, fu * fv)]
-            {
+            let f = normal.map(|c| c * lambda);
+            for ([i, j], wgt) in self.grid.face_corners(x[0], x[1]) {
                 if wgt > 0.0 {
-                    self.loads.push((self.grid.node(i + di, j + dj, n - 1), f.map(|c| c * wgt)));
+                    self.loads.push((self.grid.node(i, j, n - 1), f.map(|c| c * wgt)));
                 }
             }
         }

@@ -4,6 +4,7 @@
 use std::fmt::Write as _;
 
 use super::chart::ChartPoint;
+use crate::sim::press::Contact;
 
 /// Which error the budget bounds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -71,9 +72,8 @@ pub struct Budget {
 /// How a point meets the probe budget: the contact and the time it adds to a tick, s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ProbeContact {
-    /// `nodes` (the model's own), `surface` (the material's surface compliance), or `-` (no
-    /// probe budget).
-    pub name: &'static str,
+    /// The model's own nodes or the material's surface compliance; none without a probe budget.
+    pub contact: Option<crate::sim::press::Contact>,
     /// Time added to a tick, s.
     pub tick_s: f64,
 }
@@ -90,11 +90,11 @@ impl Budget {
 
     /// The cheapest contact with which `p` meets the probe budget, or why none does.
     pub fn probe_contact(&self, p: &ChartPoint) -> Result<ProbeContact, String> {
-        let Some(m) = self.max_probe_error_pct else { return Ok(ProbeContact { name: "-", tick_s: 0.0 }) };
+        let Some(m) = self.max_probe_error_pct else { return Ok(ProbeContact { contact: None, tick_s: 0.0 }) };
         if within(p.probe_err_pct, m) {
-            Ok(ProbeContact { name: "nodes", tick_s: 0.0 })
+            Ok(ProbeContact { contact: Some(Contact::Nodes), tick_s: 0.0 })
         } else if within(p.surface_probe_err_pct, m) && p.surface_probe_tick_s.is_finite() {
-            Ok(ProbeContact { name: "surface", tick_s: p.surface_probe_tick_s })
+            Ok(ProbeContact { contact: Some(Contact::Surface), tick_s: p.surface_probe_tick_s })
         } else if p.probe_err_pct.is_nan() && p.surface_probe_err_pct.is_nan() {
             Err("no probe score".into())
         } else {
@@ -193,7 +193,7 @@ pub fn choose(points: &[ChartPoint], object: crate::mechanics::object::Object, b
         let accurate = budget.accurate(p) && contact.is_ok();
         let verdict = match (accurate, tick <= budget_s) {
             (true, true) => match contact {
-                Ok(ProbeContact { name: "surface", .. }) => "meets both (probe: the surface compliance)".to_owned(),
+                Ok(ProbeContact { contact: Some(Contact::Surface), .. }) => "meets both (probe: the surface compliance)".to_owned(),
                 _ => "meets both".to_owned(),
             },
             (false, true) if !budget.accurate(p) => format!("too inaccurate ({})", budget.why_inaccurate(p)),
@@ -234,10 +234,10 @@ fn conclusion(s: &mut String, chosen: Option<&ChartPoint>, mine: &[&ChartPoint],
     match chosen {
         Some(c) => {
             let probe = match budget.probe_contact(c) {
-                Ok(ProbeContact { name: "nodes", .. }) => {
+                Ok(ProbeContact { contact: Some(Contact::Nodes), .. }) => {
                     format!("probe force error {:.2} % with its own node contact, ", c.probe_err_pct)
                 }
-                Ok(ProbeContact { name: "surface", tick_s }) => format!(
+                Ok(ProbeContact { contact: Some(Contact::Surface), tick_s }) => format!(
                     "probe force error {:.2} % with the material's surface compliance as its contact ({:.2} us of \
                      the tick; {:.1} % with its own nodes), ",
                     c.surface_probe_err_pct,

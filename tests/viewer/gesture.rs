@@ -3,7 +3,8 @@
 //! moved 40 pixels down. The sphere starts tangent to the surface and goes in along its inward
 //! normal, 0.1 mm a pixel (before, it started along the view ray, already 10 mm under the top
 //! face at depth 0, and read 32.1 N where the material gives 9.7 N), and its force is the
-//! material's at that indentation.
+//! material's at that indentation. Recorded on the viewer's simulation, the press replays to its
+//! forces.
 
 use egui::{Event, PointerButton, Pos2, RawInput, Rect};
 use tissue_sim::app::gestures::{Gesture, Scene, view_input};
@@ -46,13 +47,14 @@ fn frame(
     requests
 }
 
-#[test]
-fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_materials_force() {
+/// The gesture a person makes at the default window and camera: the button pressed over the
+/// middle of the top face and moved 40 pixels down, a pixel a frame (50 frames a second); the
+/// probe's press after each frame, if the gesture pressed it.
+fn forty_pixels_down(radius_mm: f64) -> Vec<Option<tissue_sim::app::recording::Press>> {
     let grid = Grid::paper();
     let mut mesh = SurfaceMesh::new(&grid);
     let positions: Vec<[f32; 3]> = grid.positions().iter().map(|p| p.map(|v| v as f32)).collect();
     mesh.update(&positions, None);
-    let radius_mm = 15.0;
     let scene = Scene {
         mesh: &mesh,
         positions: &positions,
@@ -76,17 +78,27 @@ fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_m
         modifiers: egui::Modifiers::NONE,
     };
     let mut t = 0.0;
-    let mut last = None;
     let mut frames: Vec<Vec<Event>> = vec![vec![Event::PointerMoved(p0)], vec![press(true, p0)]];
     frames.extend((1..=40).map(|k| vec![Event::PointerMoved(p0 + egui::vec2(0.0, k as f32))]));
+    let mut out = Vec::new();
     for events in frames {
         t += 0.02;
+        let mut pressed = None;
         for r in frame(&ctx, events, t, (&mut camera, &mut gesture), &scene) {
-            if let Request::Tool(Tool::Probe { centre, radius }) = r {
-                last = Some((centre, radius));
+            if let Request::Press(p) = r {
+                assert!(matches!(p.tool(), Tool::Probe { .. }));
+                pressed = Some(p);
             }
         }
+        out.push(pressed);
     }
+    out
+}
+
+#[test]
+fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_materials_force() {
+    let radius_mm = 15.0;
+    let last = forty_pixels_down(radius_mm).into_iter().flatten().last().map(|p| (p.centre(), p.radius));
     let (centre, radius) = last.expect("the gesture pressed the probe");
     assert_eq!(radius, radius_mm * 1e-3);
     // Straight down along the top face's normal, from tangent: 40 pixels, 4 mm.
@@ -106,4 +118,69 @@ fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_m
     let truth = kept.force(&material, &press, DEFAULT_TOLERANCE, &mut |_| {}).expect("the material's force").force_n;
     kept.save();
     assert!((viewer / truth - 1.0).abs() < 0.07, "the viewer's {viewer} N against the material's {truth} N");
+}
+
+/// The same gesture on the viewer's simulation (object A's default tissue, the material's surface
+/// contact), each frame's press handed to the physics timeline as the viewer's physics thread
+/// does and 20 ms stepped, then held 1 s: recorded, written as a script, read back and replayed
+/// by `simulate`, the forces agree within 1 %, the recorded indentation is the mouse's (0.1 mm a
+/// pixel) and its force the material's there within 7 %.
+#[test]
+fn the_viewers_press_recorded_replays_to_its_forces() {
+    use tissue_sim::app::recording::Timeline;
+    use tissue_sim::sim::{Integrator, Model, Simulation};
+    use tissue_sim::study::script::{Recorded, Script, run};
+    let material = Material::object_a();
+    let grid = Grid::paper();
+    let model = Model::Lattice(tissue_sim::sim::shipped::DEFAULT_TOPOLOGY);
+    let tissue = model.build_on(grid, &material, None, 0.2).expect("the default tissue");
+    let case = tissue_sim::mechanics::cases::LoadCase::bottom_clamp(&grid, "A");
+    let mut sim = Simulation::with_tissue(tissue, Integrator::Prefactored, 1e-4, Some(&case));
+    let _ = sim.set_integrator(None, 1e-4);
+    let dir = tissue_sim::io::cache_dir();
+    let surface = tissue_sim::sim::surface_probe::MaterialSurface::load_or_compute(&material, dir.as_deref(), &mut |_| true)
+        .expect("the surface compliance");
+    sim.set_surface_probe(Some(tissue_sim::sim::surface_probe::SurfaceProbe::on(&surface, grid, Some(0.2))));
+    let mut timeline = Timeline::new(true);
+    let step = |timeline: &mut Timeline, sim: &mut Simulation, seconds: f64| {
+        for _ in 0..(seconds / sim.dt).round() as usize {
+            timeline.before_step(sim);
+            sim.step().expect("a healthy step");
+            timeline.after_step(sim);
+        }
+    };
+    for press in forty_pixels_down(15.0) {
+        if let Some(p) = press {
+            timeline.press(p, 0.02, &mut sim);
+        }
+        step(&mut timeline, &mut sim, 0.02);
+    }
+    step(&mut timeline, &mut sim, 1.0);
+    let rec = timeline.recording(&sim);
+    let last = rec.force_path.last().expect("force samples").clone();
+    assert!((last.depth_m - 0.004).abs() < 1e-6, "recorded indentation {} m for 40 pixels", last.depth_m);
+    let script = Script {
+        object: tissue_sim::mechanics::object::Object::A,
+        model,
+        dt: rec.dt,
+        integrator: Some(rec.integrator),
+        damping_ratio: rec.damping_ratio,
+        clamp: "bottom".into(),
+        nodes: grid.n(),
+        contact: rec.contact,
+        compute: tissue_sim::gpu::Compute::Cpu,
+        actions: rec.actions,
+        recorded: Some(Recorded { force_path: rec.force_path, note: None }),
+    };
+    let text = serde_json::to_string_pretty(&script).expect("JSON");
+    let replay = run(&serde_json::from_str(&text).expect("the script reads back")).expect("the replay runs");
+    let cmp = replay.replay.expect("the replay compared");
+    assert_eq!(cmp.matched, cmp.recorded);
+    assert!(cmp.relative_l2 < 0.01, "{cmp:?}");
+    let mut kept = ContinuumCache::open(&material, dir.as_deref());
+    let at = [last.at[0], last.at[1], 0.1];
+    let press = Press { at, radius: 0.015, depth: last.depth_m };
+    let truth = kept.force(&material, &press, DEFAULT_TOLERANCE, &mut |_| {}).expect("the material's force").force_n;
+    kept.save();
+    assert!((last.force_n / truth - 1.0).abs() < 0.07, "recorded {} N against the material's {truth} N", last.force_n);
 }

@@ -16,6 +16,7 @@ fn script(actions: Vec<Action>) -> Script {
         contact: tissue_sim::study::script::Contact::Nodes,
         compute: tissue_sim::gpu::Compute::Cpu,
         actions,
+        recorded: None,
     }
 }
 

@@ -10,6 +10,20 @@ use crate::app::state::{Request, Shown, ToolKind, ViewSettings};
 use crate::mechanics::cases::FORCES_N;
 use crate::sim::Tool;
 
+/// With `view --record`: the button that writes the recording now.
+fn recording(ui: &mut egui::Ui, settings: &ViewSettings, requests: &mut Vec<Request>) {
+    let Some(path) = &settings.recording else { return };
+    ui.horizontal_wrapped(|ui| {
+        let save = ui.button("Save recording").on_hover_text(
+            "Write what was done so far as a simulate script that replays it (also written when the viewer closes)",
+        );
+        if save.clicked() {
+            requests.push(Request::SaveRecording);
+        }
+        ui.label(format!("to {}", path.display()));
+    });
+}
+
 /// Draws the section.
 pub fn show(
     ui: &mut egui::Ui,
@@ -19,6 +33,7 @@ pub fn show(
     requests: &mut Vec<Request>,
 ) {
     ui.label("Left mouse: the tool; right mouse: rotate; wheel: zoom.");
+    recording(ui, settings, requests);
     if settings.tool == ToolKind::Probe {
         probe_settings(ui, settings);
     }

@@ -9,10 +9,11 @@
 //! it from a recipe.
 //!
 //! `jobs`: the background jobs a request starts; `model`: another object, material file or
-//! resolution.
+//! resolution; `record`: the recording as a script.
 
 mod jobs;
 mod model;
+mod record;
 
 use std::sync::Arc;
 
@@ -60,8 +61,12 @@ pub enum Request {
     CancelCalibration,
     /// Run the calibration's result.
     ApplyCalibration,
-    /// A tool command.
+    /// A tool command: a drag target or nothing held.
     Tool(Tool),
+    /// The probe pressed (a mouse sample).
+    Press(crate::app::recording::Press),
+    /// Write the recording now (`view --record`).
+    SaveRecording,
     /// A new probe press: the force-depth plot starts afresh.
     ProbeStarted,
     /// A probe force sample (depth mm, force N) for the force-depth plot.
@@ -242,11 +247,15 @@ impl ViewerState {
             }
             Request::Tool(t) => {
                 self.shown.tool = t;
-                if let Tool::Probe { centre, radius } = t {
-                    self.shown.last_probe = Some((centre, radius));
-                }
                 send(Command::SetTool(t));
             }
+            Request::Press(p) => {
+                self.shown.tool = p.tool();
+                self.shown.last_probe = Some((p.centre(), p.radius));
+                send(Command::Press(p));
+            }
+            // The viewer writes it: the physics thread hands the recording over.
+            Request::SaveRecording => {}
             Request::ProbeStarted => self.shown.force_depth.clear(),
             Request::ForceSample(s) => match self.shown.force_depth.last_mut() {
                 // The same depth: the tissue settling under a still probe.

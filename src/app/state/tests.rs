@@ -18,7 +18,7 @@ fn wait_until(physics: &PhysicsThread, mut ok: impl FnMut(&Published) -> bool) -
 
 fn started() -> (ViewerState, PhysicsThread) {
     let (state, first) = ViewerState::new(|| {}).expect("state");
-    let physics = PhysicsThread::spawn(first).expect("physics");
+    let physics = PhysicsThread::spawn(first, false).expect("physics");
     (state, physics)
 }
 
@@ -128,8 +128,13 @@ fn the_probe_gets_the_materials_surface_compliance_in_the_background() {
     assert!(state.shown.contact_status.is_none());
     // Pressed 4 mm into the middle of the top face at once: the cube's slow modes cannot follow
     // at first (a stiffer push), then it settles to the material's static force, about 9.7 N (A).
-    let r = 0.015;
-    state.handle(Request::Tool(Tool::Probe { centre: [0.05, 0.05, 0.1 + r - 0.004], radius: r }), &mut send);
+    let press = crate::app::recording::Press {
+        at: [0.05, 0.05, 0.1],
+        direction: [0.0, 0.0, -1.0],
+        radius: 0.015,
+        depth: 0.004,
+    };
+    state.handle(Request::Press(press), &mut send);
     let first = wait_until(&physics, |p| p.tool_force[2] > 5.0);
     let p = wait_until(&physics, |p| (9.0..10.5).contains(&p.tool_force[2]));
     assert!((9.0..10.5).contains(&p.tool_force[2]), "{:?} (first {:?})", p.tool_force, first.tool_force);

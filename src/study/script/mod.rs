@@ -53,9 +53,11 @@ use glam::DVec3;
 mod check;
 mod outcome;
 mod path;
+mod recorded;
 
 pub use outcome::{Event, Outcome, ProbeSample};
-pub use path::{PathKey, PathSample};
+pub use path::{PathKey, PathSample, path_at};
+pub use recorded::{Recorded, Replay};
 
 use check::{check_script, check_steps};
 use serde::{Deserialize, Serialize};
@@ -67,7 +69,7 @@ use crate::mechanics::material::Material;
 use crate::sim::{Integrator, Model, Simulation, Tool};
 
 /// A script.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Script {
     /// `A` or `B`.
@@ -79,9 +81,11 @@ pub struct Script {
     #[serde(default = "default_dt")]
     pub dt: f64,
     /// Integrator (default: symplectic when safe for `dt`, implicit otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub integrator: Option<Integrator>,
     /// Damping ratio at the fundamental (default [`crate::response::damping::DEFAULT_DAMPING_RATIO`]);
     /// the paper's axis lattice keeps its nodal `d` and refuses one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub damping_ratio: Option<f64>,
     /// `bottom`, `none` or a case id (default `bottom`).
     #[serde(default = "default_clamp")]
@@ -99,6 +103,9 @@ pub struct Script {
     pub compute: Compute,
     /// The actions, in order.
     pub actions: Vec<Action>,
+    /// What a recording of the viewer (`view --record`) saw: the replay is compared with it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recorded: Option<Recorded>,
 }
 
 fn default_model() -> Model {
@@ -114,24 +121,7 @@ fn default_nodes() -> usize {
     Grid::paper().n()
 }
 
-/// How the probe touches the tissue.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Contact {
-    /// The material's surface compliance on a fine grid of the top face
-    /// ([`crate::sim::surface_probe`]); elsewhere, the model's surface nodes.
-    #[default]
-    Surface,
-    /// The running model's surface nodes, projected out of the sphere.
-    Nodes,
-}
-
-impl Contact {
-    /// The contact that produced the simulation's last probe force.
-    pub fn of(sim: &Simulation) -> Self {
-        if sim.probe_on_surface() { Contact::Surface } else { Contact::Nodes }
-    }
-}
+pub use crate::sim::press::Contact;
 
 /// The largest grid a script runs on, nodes per axis.
 pub const MAX_SCRIPT_NODES: usize = 32;
@@ -149,7 +139,7 @@ pub const MAX_SAMPLES: usize = 100_000;
 pub const MAX_BLOW_UPS: usize = 100;
 
 /// One scripted action.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase", deny_unknown_fields)]
 #[allow(missing_docs)]
 pub enum Action {
@@ -158,7 +148,7 @@ pub enum Action {
         node: usize,
         to: [f64; 3],
         duration_s: f64,
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         record: bool,
     },
     /// Push the spherical probe into the tissue.
@@ -170,7 +160,7 @@ pub enum Action {
         duration_s: f64,
         #[serde(default = "default_samples")]
         samples: usize,
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         record: bool,
     },
     /// Move the probe along a path of keys, sampling its force.
@@ -180,18 +170,18 @@ pub enum Action {
         direction: [f64; 3],
         keys: Vec<PathKey>,
         sample_hz: f64,
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         record: bool,
     },
     /// Let go of whatever tool is held.
     Release {
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         record: bool,
     },
     /// Let time pass.
     Wait {
         duration_s: f64,
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         record: bool,
     },
 }
@@ -286,6 +276,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
         force_depth: Vec::new(),
         force_path: Vec::new(),
         blow_ups: Vec::new(),
+        replay: None,
     };
     let last = script.actions.len().saturating_sub(1);
     for (i, action) in script.actions.iter().enumerate() {
@@ -313,6 +304,7 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
             positions,
         });
     }
+    out.replay = script.recorded.as_ref().map(|r| recorded::compare(&r.force_path, &out.force_path, sim.dt));
     Ok(out)
 }
 

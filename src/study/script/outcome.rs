@@ -68,6 +68,9 @@ pub struct Outcome {
     pub force_path: Vec<PathSample>,
     /// Blow-ups detected (and recovered from).
     pub blow_ups: Vec<String>,
+    /// For a recording (a script with `recorded`): the replay's forces against the recorded ones.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replay: Option<super::Replay>,
 }
 
 impl Outcome {

@@ -7,7 +7,7 @@ use super::{Outcome, step};
 use crate::sim::{Simulation, Tool};
 
 /// One key of a probe path.
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PathKey {
     /// Time from the action's start, s.
@@ -19,9 +19,9 @@ pub struct PathKey {
 }
 
 /// The point and depth of a probe path at time `t` (held before the first key and after the
-/// last).
-pub(super) fn path_at(keys: &[PathKey], t: f64) -> ([f64; 3], f64) {
-    let first = keys[0];
+/// last; `keys` not empty).
+pub fn path_at(keys: &[PathKey], t: f64) -> ([f64; 3], f64) {
+    let Some(&first) = keys.first() else { return ([0.0; 3], 0.0) };
     if t <= first.t {
         return (first.at, first.depth);
     }
@@ -38,7 +38,8 @@ pub(super) fn path_at(keys: &[PathKey], t: f64) -> ([f64; 3], f64) {
 }
 
 /// One sample of a probe path.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
 pub struct PathSample {
     /// Index of the probe path action.
     pub action: usize,

@@ -21,6 +21,7 @@ use glam::DVec3;
 use crate::mechanics::fem::graded::{GradedFem, GradedMesh};
 use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::mechanics::material::Material;
+use crate::response::contact;
 
 /// One press: the sphere touches `at` (a point of a free face) at depth 0 and moves `depth` into
 /// the tissue along the face's inward normal.
@@ -43,8 +44,6 @@ pub const GROWTH: f64 = 1.45;
 pub const DEFAULT_TOLERANCE: f64 = 0.01;
 /// Surface nodes whose contact compliance is solved for in one batch.
 const BATCH_NODES: usize = 16;
-/// Active-set iterations of one contact solve.
-const MAX_CONTACT_ITERATIONS: usize = 60;
 
 /// The outward normal of the free face `at` lies on (the top face first), or why there is none.
 pub fn free_face_normal(at: [f64; 3]) -> Result<[f64; 3], String> {
@@ -162,68 +161,34 @@ impl PointSolve {
         self.fem.fixed.len()
     }
 
-    /// The active-set contact solve of one press: force on the sphere and contact count.
+    /// The contact of one press ([`contact::solve`]): force on the sphere and contact count.
     fn press(&mut self, press: &Press) -> anyhow::Result<([f64; 3], usize)> {
-        let geometry: Vec<([f64; 3], f64)> =
-            self.window.iter().map(|&p| gap(press, self.fem.mesh.position(p))).collect();
-        let mut active: Vec<usize> = (0..self.window.len()).filter(|&w| geometry[w].1 > 0.0).collect();
-        let mut lambda = Vec::new();
-        for _ in 0..MAX_CONTACT_ITERATIONS {
-            if active.is_empty() {
-                lambda.clear();
-                break;
-            }
-            let nodes: Vec<usize> = active.iter().map(|&w| self.window[w]).collect();
-            self.ensure(&nodes)?;
-            // Normal displacement at window slot `q` of a unit normal force at active slot `j`.
-            let response = |cols: &[Vec<f64>; 3], nj: [f64; 3], q: usize, nq: [f64; 3]| -> f64 {
-                (0..3).map(|c| nj[c] * (0..3).map(|d| nq[d] * cols[c][3 * q + d]).sum::<f64>()).sum()
-            };
-            let m = active.len();
-            let s = nalgebra::DMatrix::from_fn(m, m, |i, j| {
-                let cols = &self.columns[&nodes[j]];
-                response(cols, geometry[active[j]].0, active[i], geometry[active[i]].0)
-            });
-            let g = nalgebra::DVector::from_iterator(m, active.iter().map(|&w| geometry[w].1));
-            let s = (&s + s.transpose()) * 0.5;
-            let factor =
-                s.cholesky().ok_or_else(|| anyhow::anyhow!("the contact compliance is not positive definite"))?;
-            lambda = factor.solve(&g).iter().copied().collect();
-            let mut next: Vec<usize> = active.iter().zip(&lambda).filter(|(_, l)| **l > 0.0).map(|(w, _)| *w).collect();
-            let tol = 1e-9 * press.radius;
-            for q in 0..self.window.len() {
-                if active.contains(&q) {
-                    continue;
-                }
-                let un: f64 = active
-                    .iter()
-                    .zip(&lambda)
-                    .map(|(&w, l)| l * response(&self.columns[&self.window[w]], geometry[w].0, q, geometry[q].0))
-                    .sum();
-                if un < geometry[q].1 - tol {
-                    next.push(q);
-                }
-            }
-            next.sort_unstable();
-            if next == active {
-                break;
-            }
-            active = next;
-        }
-        let mut force = DVec3::ZERO;
-        for (&w, l) in active.iter().zip(&lambda) {
-            force -= DVec3::from(geometry[w].0) * *l;
-        }
-        Ok((force.to_array(), active.len()))
+        let mut scratch = contact::ContactScratch::default();
+        let back = press.direction().map(|c| -c);
+        let mesh = &self.fem.mesh;
+        scratch.candidates.extend(
+            self.window.iter().map(|&p| contact::sphere_gap(press.centre(), press.radius, mesh.position(p), back)),
+        );
+        contact::solve(self, &mut scratch, 1e-9 * press.radius)?;
+        Ok((scratch.force(), scratch.active.len()))
+    }
+}
+
+impl contact::Compliance for PointSolve {
+    fn prepare(&mut self, slots: &[usize]) -> Result<(), contact::ContactError> {
+        let nodes: Vec<usize> = slots.iter().map(|&w| self.window[w]).collect();
+        self.ensure(&nodes).map_err(|e| contact::ContactError::Body(format!("{e:#}")))
+    }
+
+    fn normal(&self, i: usize, n_i: [f64; 3], j: usize, n_j: [f64; 3]) -> f64 {
+        let cols = &self.columns[&self.window[j]];
+        (0..3).map(|c| n_j[c] * (0..3).map(|d| n_i[d] * cols[c][3 * i + d]).sum::<f64>()).sum()
     }
 }
 
 /// Outward normal from the sphere's centre to `x` and the depth of `x` inside the sphere.
 fn gap(press: &Press, x: [f64; 3]) -> ([f64; 3], f64) {
-    let d = DVec3::from(x) - DVec3::from(press.centre());
-    let dist = d.length();
-    let n = if dist > 1e-12 { d / dist } else { -DVec3::from(press.direction()) };
-    (n.to_array(), press.radius - dist)
+    contact::sphere_gap(press.centre(), press.radius, x, press.direction().map(|c| -c))
 }
 
 /// The material's force on `press`, refining the graded mesh through [`SPACING_RATIOS`] until

@@ -20,6 +20,7 @@ use glam::DVec3;
 use crate::mechanics::fem::graded::{GradedFem, GradedMesh};
 use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
+use crate::response::contact;
 use crate::validate::continuum::{GROWTH, SPACING_RATIOS};
 use crate::validate::dynamic::reference::{DURATION_S, TAP_DEPTH_M, TAP_DURATION_S, TAP_POINT, Trajectory, tap_centre};
 use crate::validate::touch::PROBE_RADIUS_M;
@@ -34,8 +35,6 @@ const MAX_HALVINGS: usize = 7;
 const FAR_STEPS: f64 = 4.0;
 /// Window nodes whose compliance is solved in one batch.
 const BATCH_NODES: usize = 16;
-/// Active-set iterations of one contact solve.
-const MAX_CONTACT_ITERATIONS: usize = 60;
 
 /// The material's converged tap.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -109,61 +108,20 @@ impl TapRun {
         Ok(Self { fem, mass, window, w3 })
     }
 
-    /// Normal compliance between window slots `i` and `j`.
-    fn normal(&self, i: usize, ni: [f64; 3], j: usize, nj: [f64; 3]) -> f64 {
-        let m3 = 3 * self.window.len();
-        (0..3).map(|c| nj[c] * (0..3).map(|d| ni[d] * self.w3[(3 * j + c) * m3 + 3 * i + d]).sum::<f64>()).sum()
-    }
 
-    /// The contact multipliers of the unconstrained answer `u` for the sphere at `centre`: the
-    /// active window slots and their forces along the normals.
-    fn contact(&self, centre: [f64; 3], u: &[f64], active: &mut Vec<usize>) -> anyhow::Result<Vec<f64>> {
-        let geometry: Vec<([f64; 3], f64)> =
-            self.window.iter().map(|&p| gap(centre, self.fem.mesh.position(p))).collect();
-        let free_gap = |q: usize| {
-            let p = self.window[q];
-            let (n, g) = geometry[q];
-            g - (0..3).map(|c| n[c] * u[3 * p + c]).sum::<f64>()
-        };
-        active.retain(|&q| free_gap(q) > -PROBE_RADIUS_M);
-        for q in 0..self.window.len() {
-            if free_gap(q) > 0.0 && !active.contains(&q) {
-                active.push(q);
-            }
-        }
-        active.sort_unstable();
-        let mut lambda = Vec::new();
-        for _ in 0..MAX_CONTACT_ITERATIONS {
-            if active.is_empty() {
-                return Ok(Vec::new());
-            }
-            let m = active.len();
-            let s = nalgebra::DMatrix::from_fn(m, m, |i, j| {
-                self.normal(active[i], geometry[active[i]].0, active[j], geometry[active[j]].0)
-            });
-            let s = (&s + s.transpose()) * 0.5;
-            let g = nalgebra::DVector::from_iterator(m, active.iter().map(|&q| free_gap(q)));
-            let factor =
-                s.cholesky().ok_or_else(|| anyhow::anyhow!("the tap's contact compliance is not positive definite"))?;
-            lambda = factor.solve(&g).iter().copied().collect::<Vec<f64>>();
-            let mut next: Vec<usize> = active.iter().zip(&lambda).filter(|(_, l)| **l > 0.0).map(|(q, _)| *q).collect();
-            for q in 0..self.window.len() {
-                if active.contains(&q) {
-                    continue;
-                }
-                let moved: f64 =
-                    active.iter().zip(&lambda).map(|(&j, l)| l * self.normal(q, geometry[q].0, j, geometry[j].0)).sum();
-                if moved < free_gap(q) - 1e-12 {
-                    next.push(q);
-                }
-            }
-            next.sort_unstable();
-            if next == *active {
-                return Ok(active.iter().zip(&lambda).map(|(_, &l)| l.max(0.0)).collect());
-            }
-            *active = next;
-        }
-        Ok(lambda)
+    /// The contact of the unconstrained answer `u` for the sphere at `centre`
+    /// ([`contact::solve`], warm-started from the last step's contact where it is within a
+    /// radius): the window slots in contact and their forces along the normals, in `scratch`.
+    fn contact(&self, centre: [f64; 3], u: &[f64], scratch: &mut contact::ContactScratch) -> anyhow::Result<()> {
+        scratch.candidates.clear();
+        scratch.candidates.extend(self.window.iter().map(|&p| {
+            let (n, g) = gap(centre, self.fem.mesh.position(p));
+            (n, g - (0..3).map(|c| n[c] * u[3 * p + c]).sum::<f64>())
+        }));
+        let candidates = &scratch.candidates;
+        scratch.active.retain(|&q| candidates[q].1 > -PROBE_RADIUS_M);
+        contact::solve(&mut Window(self), scratch, 1e-12)?;
+        Ok(())
     }
 
     /// The tap stepped at `h` with mass-proportional damping `alpha`: the force on the sphere at
@@ -175,7 +133,7 @@ impl TapRun {
         let mut forces = vec![0.0];
         let mut rhs = vec![0.0; n];
         let mut base = vec![0.0; n];
-        let mut active = Vec::new();
+        let mut scratch = contact::ContactScratch::default();
         let c_u = 1.0 / (h * h) + alpha / h;
         for k in 0..steps {
             let t = (k + 1) as f64 * h;
@@ -185,20 +143,18 @@ impl TapRun {
             rhs.copy_from_slice(&base);
             self.fem.solve_columns(&mut rhs, 1)?;
             let centre = tap_centre(t).unwrap_or([TAP_POINT[0], TAP_POINT[1], 1.0]);
-            let lambda = self.contact(centre, &rhs, &mut active)?;
-            let mut force = DVec3::ZERO;
-            if !lambda.is_empty() {
+            self.contact(centre, &rhs, &mut scratch)?;
+            if !scratch.active.is_empty() {
                 rhs.copy_from_slice(&base);
-                for (&q, &l) in active.iter().zip(&lambda) {
-                    let p = self.window[q];
-                    let (nrm, _) = gap(centre, self.fem.mesh.position(p));
+                for (&q, &l) in scratch.active.iter().zip(&scratch.lambda) {
+                    let (p, nrm) = (self.window[q], scratch.candidates[q].0);
                     for c in 0..3 {
                         rhs[3 * p + c] += l * nrm[c];
                     }
-                    force -= DVec3::from(nrm) * l;
                 }
                 self.fem.solve_columns(&mut rhs, 1)?;
             }
+            let force = DVec3::from(scratch.force());
             // Backward Euler: the nodes held on the sphere take its motion (inelastic contact).
             for d in 0..n {
                 let un = if self.fem.fixed[d] { 0.0 } else { rhs[d] };
@@ -217,10 +173,17 @@ impl TapRun {
 
 /// Outward normal from the sphere's centre to `x` and the depth of `x` inside the sphere.
 fn gap(centre: [f64; 3], x: [f64; 3]) -> ([f64; 3], f64) {
-    let d = DVec3::from(x) - DVec3::from(centre);
-    let dist = d.length();
-    let n = if dist > 1e-12 { d / dist } else { DVec3::NEG_Z };
-    (n.to_array(), PROBE_RADIUS_M - dist)
+    contact::sphere_gap(centre, PROBE_RADIUS_M, x, [0.0, 0.0, -1.0])
+}
+
+/// The tap's window as the contact sees it: the normal compliance between window slots.
+struct Window<'a>(&'a TapRun);
+
+impl contact::Compliance for Window<'_> {
+    fn normal(&self, i: usize, ni: [f64; 3], j: usize, nj: [f64; 3]) -> f64 {
+        let m3 = 3 * self.0.window.len();
+        (0..3).map(|c| nj[c] * (0..3).map(|d| ni[d] * self.0.w3[(3 * j + c) * m3 + 3 * i + d]).sum::<f64>()).sum()
+    }
 }
 
 /// Relative L2 in time between two force histories at steps `h` and `h_ref` (the first

@@ -35,7 +35,7 @@ pub struct PressScore {
 pub struct MaterialReport {
     /// How the model's probe touches: `surface` (the material's surface compliance) or `nodes`
     /// (the model's surface nodes).
-    pub contact: String,
+    pub contact: crate::sim::press::Contact,
     /// What the reference is.
     pub reference: String,
     /// Its convergence tolerance (relative change of the force between two spacings).
@@ -72,7 +72,7 @@ pub fn compliance_force_n(
 /// before each spacing of a computation).
 pub fn evaluate(
     material: &Material,
-    contact: &str,
+    contact: crate::sim::press::Contact,
     model_force: &mut dyn FnMut(&Press) -> anyhow::Result<f64>,
     fem: &mut Responder,
     cache: &mut ContinuumCache,
@@ -118,7 +118,7 @@ pub fn evaluate(
         n => 0.5 * (validation[n / 2 - 1] + validation[n / 2]),
     };
     Ok(MaterialReport {
-        contact: contact.into(),
+        contact,
         reference: "the material: hex8 FEM on meshes graded around the contact, refined until the force changes by \
                     less than the tolerance; frictionless sphere, face z = 0 clamped"
             .into(),
@@ -184,7 +184,7 @@ impl MaterialReport {
              contact: {}\n\
              {:<34} {:<10} {:>8} {:>9} {:>9} {:>8} {:>9}\n",
             100.0 * self.tolerance,
-            self.contact,
+            self.contact.name(),
             "press",
             "set",
             "model",

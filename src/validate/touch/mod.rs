@@ -21,7 +21,7 @@ pub mod score;
 use crate::mechanics::grid::Grid;
 
 /// Radius of the viewer's probe sphere, metres.
-pub const PROBE_RADIUS_M: f64 = 0.015;
+pub const PROBE_RADIUS_M: f64 = crate::sim::press::DEFAULT_RADIUS_M;
 /// Probe depths, metres.
 pub const PROBE_DEPTHS_M: [f64; 3] = [0.002, 0.004, 0.006];
 /// Number of natural frequencies compared.

@@ -1,0 +1,269 @@
+//! The one contact of the project: a rigid frictionless sphere against the nodes of a surface,
+//! linearised (each node moves onto the sphere along the sphere's normal at rest) and solved by
+//! an active set. Whatever knows the body's compliance between the candidate nodes serves it
+//! through [`Compliance`]: the model's factorised stiffness (the touch benchmark's probe), the
+//! continuum reference's batched solves (`validate::continuum`, static and the tap), the
+//! material's surface compliance (the viewer's probe).
+//!
+//! The solve allocates nothing once its [`ContactScratch`] has room for the contact (the viewer's
+//! probe takes its room once): the normal compliance of the active nodes is factorised in place
+//! by faer's dense Cholesky.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt;
+use faer::{Conj, MatMut, MatRef, Par};
+use glam::DVec3;
+
+/// Active-set iterations of one solve; a contact that has not settled then is an error.
+pub const MAX_ITERATIONS: usize = 60;
+
+/// Where the sphere (`centre`, `radius`) meets a node at `x`: the outward normal from the centre
+/// (`fallback` where `x` is the centre) and the node's depth inside the sphere (`radius -
+/// distance`; negative outside). The one rule of the sphere's gap.
+pub fn sphere_gap(centre: [f64; 3], radius: f64, x: [f64; 3], fallback: [f64; 3]) -> ([f64; 3], f64) {
+    let d = DVec3::from(x) - DVec3::from(centre);
+    let dist = d.length();
+    let n = if dist > 1e-12 { (d / dist).to_array() } else { fallback };
+    (n, radius - dist)
+}
+
+/// What the active set needs of the body.
+pub trait Compliance {
+    /// Makes the responses to forces at the candidates `slots` available (where they are solved
+    /// on demand, in one batch).
+    fn prepare(&mut self, slots: &[usize]) -> Result<(), ContactError> {
+        let _ = slots;
+        Ok(())
+    }
+
+    /// `n_i . W(i <- j) n_j`, metres per newton: the displacement of candidate `i` along `n_i`
+    /// under a unit force at candidate `j` along `n_j` (`j` prepared).
+    fn normal(&self, i: usize, n_i: [f64; 3], j: usize, n_j: [f64; 3]) -> f64;
+}
+
+/// Errors of a contact solve.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ContactError {
+    /// The normal compliance of the active nodes is not positive definite.
+    #[error("the contact compliance is not positive definite")]
+    NotPositiveDefinite,
+    /// The active set did not settle.
+    #[error("the contact did not settle in {0} active-set iterations")]
+    NotSettled(usize),
+    /// The body could not answer.
+    #[error("{0}")]
+    Body(String),
+}
+
+/// The contact's memory: the candidates the caller sets, the active set (a warm start in, the
+/// contact out) and their forces.
+pub struct ContactScratch {
+    /// Per candidate: the outward normal from the sphere's centre and the gap to close along it,
+    /// metres (its depth inside the sphere less the normal displacement it already has).
+    pub candidates: Vec<([f64; 3], f64)>,
+    /// Candidates in contact, increasing: a warm start before a solve (others with a positive gap
+    /// join), the contact after it.
+    pub active: Vec<usize>,
+    /// Their normal forces, newtons (after a solve).
+    pub lambda: Vec<f64>,
+    next: Vec<usize>,
+    /// The factorised normal compliance of the active set, column-major.
+    matrix: Vec<f64>,
+    stack: MemBuffer,
+    room: usize,
+}
+
+impl std::fmt::Debug for ContactScratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ContactScratch").field("candidates", &self.candidates.len()).field("active", &self.active).finish()
+    }
+}
+
+impl ContactScratch {
+    /// Room for `n` candidates in contact (more grows it, allocating).
+    pub fn with_room(n: usize) -> Self {
+        let mut s = Self {
+            candidates: Vec::with_capacity(n),
+            active: Vec::with_capacity(n),
+            lambda: Vec::with_capacity(n),
+            next: Vec::with_capacity(n),
+            matrix: Vec::new(),
+            stack: MemBuffer::new(faer::dyn_stack::StackReq::EMPTY),
+            room: 0,
+        };
+        s.grow(n);
+        s
+    }
+
+    fn grow(&mut self, n: usize) {
+        if n <= self.room {
+            return;
+        }
+        let factor = llt::factor::cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default());
+        let solve = llt::solve::solve_in_place_scratch::<f64>(n, 1, Par::Seq);
+        self.stack = MemBuffer::new(factor.or(solve));
+        self.matrix.reserve(n * n);
+        self.room = n;
+    }
+
+    /// The contact force on the sphere, newtons (after a solve): minus the normal forces along
+    /// the candidates' normals.
+    pub fn force(&self) -> [f64; 3] {
+        let mut f = DVec3::ZERO;
+        for (&q, &l) in self.active.iter().zip(&self.lambda) {
+            f -= DVec3::from(self.candidates[q].0) * l;
+        }
+        f.to_array()
+    }
+
+    /// Solves `S x = b` in place with the active set's factorised normal compliance `S` (after a
+    /// solve with contact; `b` as long as the active set).
+    pub fn solve_factored(&mut self, b: &mut [f64]) {
+        let m = self.active.len();
+        if m == 0 || b.len() != m {
+            return;
+        }
+        llt::solve::solve_in_place_with_conj(
+            MatRef::from_column_major_slice(&self.matrix[..m * m], m, m),
+            Conj::No,
+            MatMut::from_column_major_slice_mut(b, m, 1),
+            Par::Seq,
+            MemStack::new(&mut self.stack),
+        );
+    }
+}
+
+impl Default for ContactScratch {
+    fn default() -> Self {
+        Self::with_room(0)
+    }
+}
+
+/// Solves the contact of the candidates in `s` against `body`: every candidate in contact is put
+/// on the sphere by normal forces, none pulls, and no other ends inside by more than `tol`
+/// (metres). The warm start is `s.active` with every candidate of positive gap.
+pub fn solve(body: &mut dyn Compliance, s: &mut ContactScratch, tol: f64) -> Result<(), ContactError> {
+    let n = s.candidates.len();
+    s.active.retain(|&q| q < n);
+    s.active.extend((0..n).filter(|&q| s.candidates[q].1 > 0.0));
+    s.active.sort_unstable();
+    s.active.dedup();
+    for _ in 0..MAX_ITERATIONS {
+        s.lambda.clear();
+        if s.active.is_empty() {
+            return Ok(());
+        }
+        body.prepare(&s.active)?;
+        factor_active(body, s)?;
+        // Keep pushing contacts; add candidates that end inside the sphere.
+        s.next.clear();
+        for (&q, &l) in s.active.iter().zip(&s.lambda) {
+            if l > 0.0 {
+                s.next.push(q);
+            }
+        }
+        for q in 0..n {
+            if s.active.binary_search(&q).is_ok() {
+                continue;
+            }
+            let (nq, gap) = s.candidates[q];
+            let mut moved = 0.0;
+            for (&j, &l) in s.active.iter().zip(&s.lambda) {
+                moved += l * body.normal(q, nq, j, s.candidates[j].0);
+            }
+            if moved < gap - tol {
+                s.next.push(q);
+            }
+        }
+        s.next.sort_unstable();
+        if s.next == s.active {
+            return Ok(());
+        }
+        std::mem::swap(&mut s.next, &mut s.active);
+    }
+    // The forces solved last belong to the set before the swap: none of them is used.
+    s.active.clear();
+    s.lambda.clear();
+    Err(ContactError::NotSettled(MAX_ITERATIONS))
+}
+
+/// Factorises the active set's normal compliance (symmetrised: columns solved in f32, or
+/// separately, are symmetric only to their rounding) and solves its forces into `s.lambda`.
+fn factor_active(body: &dyn Compliance, s: &mut ContactScratch) -> Result<(), ContactError> {
+    let m = s.active.len();
+    s.grow(m);
+    let ContactScratch { candidates, active, lambda, matrix, stack, .. } = s;
+    matrix.clear();
+    matrix.resize(m * m, 0.0);
+    for (j, &wj) in active.iter().enumerate() {
+        let nj = candidates[wj].0;
+        for (i, &wi) in active.iter().enumerate() {
+            matrix[i + m * j] = body.normal(wi, candidates[wi].0, wj, nj);
+        }
+        lambda.push(candidates[wj].1);
+    }
+    for j in 0..m {
+        for i in 0..j {
+            let v = 0.5 * (matrix[i + m * j] + matrix[j + m * i]);
+            matrix[i + m * j] = v;
+            matrix[j + m * i] = v;
+        }
+    }
+    let mut a = MatMut::from_column_major_slice_mut(&mut matrix[..m * m], m, m);
+    llt::factor::cholesky_in_place(a.as_mut(), Default::default(), Par::Seq, MemStack::new(stack), Default::default())
+        .map_err(|_| ContactError::NotPositiveDefinite)?;
+    llt::solve::solve_in_place_with_conj(
+        a.as_ref(),
+        Conj::No,
+        MatMut::from_column_major_slice_mut(&mut lambda[..m], m, 1),
+        Par::Seq,
+        MemStack::new(stack),
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Independent springs on a line of candidates (a diagonal compliance) with a coupling.
+    struct Chain(Vec<f64>, f64);
+
+    impl Compliance for Chain {
+        fn normal(&self, i: usize, _: [f64; 3], j: usize, _: [f64; 3]) -> f64 {
+            if i == j { self.0[i] } else { self.1 / (1.0 + (i as f64 - j as f64).abs()) }
+        }
+    }
+
+    /// Candidates pressed with gaps `g`: the solve puts the contacts on the sphere, no force
+    /// pulls, no other candidate ends inside, from any warm start.
+    #[test]
+    fn no_contact_pulls_and_no_candidate_ends_inside() {
+        let gaps = [1e-3, 4e-4, -2e-4, 2e-4, -1e-3, 8e-4];
+        let mut body = Chain(vec![1e-4, 2e-4, 1e-4, 3e-4, 1e-4, 1e-4], 5e-5);
+        for warm in [vec![], vec![2, 4], vec![0, 1, 2, 3, 4, 5]] {
+            let mut s = ContactScratch::with_room(2);
+            s.candidates.extend(gaps.iter().map(|&g| ([0.0, 0.0, 1.0], g)));
+            s.active = warm;
+            solve(&mut body, &mut s, 1e-15).expect("settles");
+            assert!(s.lambda.iter().all(|&l| l > 0.0), "{:?}", s.lambda);
+            for q in 0..gaps.len() {
+                let moved: f64 = s.active.iter().zip(&s.lambda).map(|(&j, l)| l * body.normal(q, [0.0; 3], j, [0.0; 3])).sum();
+                if s.active.contains(&q) {
+                    assert!((moved - gaps[q]).abs() < 1e-15, "{q}: {moved} against {}", gaps[q]);
+                } else {
+                    assert!(moved >= gaps[q] - 1e-15, "{q} ends inside");
+                }
+            }
+            assert!(s.force()[2] < 0.0);
+        }
+    }
+
+    #[test]
+    fn a_compliance_that_is_not_positive_definite_is_an_error() {
+        let mut body = Chain(vec![-1e-4; 2], 0.0);
+        let mut s = ContactScratch::default();
+        s.candidates.extend([([0.0, 0.0, 1.0], 1e-3), ([0.0, 0.0, 1.0], 1e-3)]);
+        assert_eq!(solve(&mut body, &mut s, 0.0), Err(ContactError::NotPositiveDefinite));
+    }
+}
