@@ -115,12 +115,15 @@ fn explicit_and_implicit_steps_do_not_allocate() {
     // lag's fixed point) and the modes advanced, in preallocated memory.
     let material = tissue_sim::mechanics::material::Material::object_a();
     let compliance =
-        tissue_sim::response::surface_compliance::SurfaceCompliance::compute(&material, 10, &mut |_| true).expect("c");
-    let surface = tissue_sim::sim::surface_probe::MaterialSurface {
+        tissue_sim::sim::material_surface::compliance::SurfaceCompliance::compute(&material, 10, &mut |_| true)
+            .expect("c");
+    let surface = tissue_sim::sim::material_surface::MaterialSurface {
         compliance: std::sync::Arc::new(compliance),
-        modes: std::sync::Arc::new(tissue_sim::sim::modal_lag::ModalBasis::of_material(&material).expect("modes")),
+        modes: std::sync::Arc::new(
+            tissue_sim::sim::material_surface::modal_lag::ModalBasis::of_material(&material).expect("modes"),
+        ),
     };
-    let probe = tissue_sim::sim::surface_probe::SurfaceProbe::on(&surface, grid, Some(0.2));
+    let probe = tissue_sim::sim::material_surface::SurfaceProbe::on(&surface, grid, Some(0.2));
     assert!(probe.is_dynamic());
     sim.set_surface_probe(Some(probe));
     let at = |i: usize| Tool::Probe { centre: [0.03 + 2e-4 * i as f64, 0.05, 0.1 + 0.015 - 0.004], radius: 0.015 };

@@ -61,7 +61,7 @@ pub enum Command {
     Replace(Replacement),
     /// The probe's contact: the material's surface compliance (`Some`, kept across
     /// replacements of the same material) or the model's surface nodes (`None`).
-    SetSurfaceProbe(Option<crate::sim::surface_probe::MaterialSurface>),
+    SetSurfaceProbe(Option<crate::sim::material_surface::MaterialSurface>),
 }
 
 /// How fast the physics runs, over the last wall-clock second.
@@ -195,7 +195,7 @@ struct Loop {
     paused: bool,
     owed: f64,
     /// The material's surface compliance for the probe, when the viewer has one.
-    compliance: Option<crate::sim::surface_probe::MaterialSurface>,
+    compliance: Option<crate::sim::material_surface::MaterialSurface>,
     /// What the hand does, in simulated time (and, recording, what it did).
     timeline: Timeline,
     /// When the last tool command came.
@@ -236,10 +236,9 @@ impl Loop {
 
     /// The probe of the running simulation on the kept surface compliance, if any.
     fn attach_surface_probe(&self, sim: &mut Simulation) {
-        let probe = self
-            .compliance
-            .as_ref()
-            .map(|c| crate::sim::surface_probe::SurfaceProbe::on(c, sim.tissue.grid(), sim.tissue.damping().ratio()));
+        let probe = self.compliance.as_ref().map(|c| {
+            crate::sim::material_surface::SurfaceProbe::on(c, sim.tissue.grid(), sim.tissue.damping().ratio())
+        });
         sim.set_surface_probe(probe);
     }
 }

@@ -21,8 +21,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     if args.gpu {
         let gpu = crate::gpu::ComputeDevice::open()?;
         let material = crate::mechanics::material::Material::object_a();
-        let mut said = crate::sim::surface_probe::stderr_report();
-        let surface = crate::sim::surface_probe::MaterialSurface::load_or_compute(
+        let mut said = crate::sim::material_surface::stderr_report();
+        let surface = crate::sim::material_surface::MaterialSurface::load_or_compute(
             &material,
             crate::io::cache_dir().as_deref(),
             &mut |e| said.event(e),

@@ -121,15 +121,16 @@ fn against_material(
     let fem = Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear);
     let (mut own, _) = touch_score::responder(fem, None, material, grid)?;
     let start = std::time::Instant::now();
-    let mut model_force: Box<dyn FnMut(&continuum::Press) -> anyhow::Result<f64>> = if contact == crate::sim::press::Contact::Surface {
-        let mut report = crate::sim::surface_probe::stderr_report();
-        let compliance =
-            crate::sim::surface_probe::load_or_compute(material, dir.as_deref(), &mut |e| report.event(e))?;
-        let mut scratch = crate::response::surface_compliance::ContactScratch::default();
-        Box::new(move |press| probe_score::compliance_force_n(&compliance, &mut scratch, press))
-    } else {
-        Box::new(move |press| probe_score::responder_force_n(&mut responder, press))
-    };
+    let mut model_force: Box<dyn FnMut(&continuum::Press) -> anyhow::Result<f64>> =
+        if contact == crate::sim::press::Contact::Surface {
+            let mut report = crate::sim::material_surface::stderr_report();
+            let compliance =
+                crate::sim::material_surface::load_or_compute(material, dir.as_deref(), &mut |e| report.event(e))?;
+            let mut scratch = crate::sim::material_surface::compliance::ContactScratch::default();
+            Box::new(move |press| probe_score::compliance_force_n(&compliance, &mut scratch, press))
+        } else {
+            Box::new(move |press| probe_score::responder_force_n(&mut responder, press))
+        };
     probe_score::evaluate(
         material,
         contact,

@@ -61,8 +61,7 @@ pub struct ContactScratch {
     /// Per candidate: the outward normal from the sphere's centre and the gap to close along it,
     /// metres (its depth inside the sphere less the normal displacement it already has).
     pub candidates: Vec<([f64; 3], f64)>,
-    /// Candidates in contact, increasing: a warm start before a solve (others with a positive gap
-    /// join), the contact after it.
+    /// Candidates in contact, increasing: a warm start before a solve, the contact after it.
     pub active: Vec<usize>,
     /// Their normal forces, newtons (after a solve).
     pub lambda: Vec<f64>,
@@ -75,7 +74,10 @@ pub struct ContactScratch {
 
 impl std::fmt::Debug for ContactScratch {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("ContactScratch").field("candidates", &self.candidates.len()).field("active", &self.active).finish()
+        f.debug_struct("ContactScratch")
+            .field("candidates", &self.candidates.len())
+            .field("active", &self.active)
+            .finish()
     }
 }
 
@@ -141,11 +143,15 @@ impl Default for ContactScratch {
 
 /// Solves the contact of the candidates in `s` against `body`: every candidate in contact is put
 /// on the sphere by normal forces, none pulls, and no other ends inside by more than `tol`
-/// (metres). The warm start is `s.active` with every candidate of positive gap.
-pub fn solve(body: &mut dyn Compliance, s: &mut ContactScratch, tol: f64) -> Result<(), ContactError> {
+/// (metres). The first active set is `s.active` (a warm start: the last contact, where the sphere
+/// moved a little, settles in one or two iterations), or where it is empty every candidate of
+/// positive gap (which overshoots the contact: the surface sinks around the sphere).
+pub fn solve<C: Compliance + ?Sized>(body: &mut C, s: &mut ContactScratch, tol: f64) -> Result<(), ContactError> {
     let n = s.candidates.len();
     s.active.retain(|&q| q < n);
-    s.active.extend((0..n).filter(|&q| s.candidates[q].1 > 0.0));
+    if s.active.is_empty() {
+        s.active.extend((0..n).filter(|&q| s.candidates[q].1 > 0.0));
+    }
     s.active.sort_unstable();
     s.active.dedup();
     for _ in 0..MAX_ITERATIONS {
@@ -189,7 +195,7 @@ pub fn solve(body: &mut dyn Compliance, s: &mut ContactScratch, tol: f64) -> Res
 
 /// Factorises the active set's normal compliance (symmetrised: columns solved in f32, or
 /// separately, are symmetric only to their rounding) and solves its forces into `s.lambda`.
-fn factor_active(body: &dyn Compliance, s: &mut ContactScratch) -> Result<(), ContactError> {
+fn factor_active<C: Compliance + ?Sized>(body: &C, s: &mut ContactScratch) -> Result<(), ContactError> {
     let m = s.active.len();
     s.grow(m);
     let ContactScratch { candidates, active, lambda, matrix, stack, .. } = s;
@@ -248,7 +254,8 @@ mod tests {
             solve(&mut body, &mut s, 1e-15).expect("settles");
             assert!(s.lambda.iter().all(|&l| l > 0.0), "{:?}", s.lambda);
             for q in 0..gaps.len() {
-                let moved: f64 = s.active.iter().zip(&s.lambda).map(|(&j, l)| l * body.normal(q, [0.0; 3], j, [0.0; 3])).sum();
+                let moved: f64 =
+                    s.active.iter().zip(&s.lambda).map(|(&j, l)| l * body.normal(q, [0.0; 3], j, [0.0; 3])).sum();
                 if s.active.contains(&q) {
                     assert!((moved - gaps[q]).abs() < 1e-15, "{q}: {moved} against {}", gaps[q]);
                 } else {

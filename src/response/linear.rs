@@ -169,7 +169,6 @@ impl ProbeAnswer {
     }
 }
 
-
 impl SceneSolver {
     /// The pattern of `k` on the scene (factorise with [`SceneSolver::factor`]).
     pub fn new(grid: &Grid, k: &GroupedStiffness) -> Result<Self, SparseError> {

@@ -14,9 +14,6 @@
 //!   mode, in closed form.
 //!
 //! May use: [`crate::mechanics`], [`crate::io`].
-//!
-//! [`surface_compliance`]: the top face's contact compliance of a fine FEM, the probe's force from
-//! the material.
 
 pub mod contact;
 pub mod damping;
@@ -25,4 +22,3 @@ pub mod modal;
 pub mod modes;
 pub mod single_mode;
 pub mod stiffest_mode;
-pub mod surface_compliance;

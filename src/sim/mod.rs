@@ -12,8 +12,8 @@
 //!
 //! May use: [`crate::response`], [`crate::mechanics`], [`crate::io`].
 //!
-//! [`surface_probe`]: the probe on the material's surface compliance; [`modal_lag`]: its slow modes
-//! lagging behind their static answer.
+//! [`material_surface`]: the probe on the material's surface: its contact compliance (computed,
+//! kept), its slow modes lagging behind their static answer, and the probe that joins them.
 
 /// The interactive tick, ms: the viewer's physics loop advances the clock by one tick at a time
 /// (its steps substep it), the probe's contact solve runs at most once a tick (the haptic rate),
@@ -25,13 +25,12 @@ pub const TICK_S: f64 = TICK_MS as f64 * 1e-3;
 pub mod explicit_form;
 pub mod fem_tissue;
 pub mod integrator;
-pub mod modal_lag;
+pub mod material_surface;
 pub mod model;
 pub mod msm_tissue;
 pub mod press;
 pub mod shipped;
 pub mod simulation;
-pub mod surface_probe;
 pub mod tissue;
 pub mod tool;
 

@@ -17,8 +17,8 @@
 use glam::DVec3;
 
 use crate::mechanics::grid::CUBE_SIDE_M;
-pub use crate::response::surface_compliance::MAX_CONTACT_NODES;
-use crate::response::surface_compliance::{DEFAULT_DIVISIONS, window_count};
+pub use crate::sim::material_surface::compliance::MAX_CONTACT_NODES;
+use crate::sim::material_surface::compliance::{DEFAULT_DIVISIONS, window_count};
 
 /// The probe's radius unless one is asked for (the viewer's, the touch benchmark's), metres.
 pub const DEFAULT_RADIUS_M: f64 = 0.015;
@@ -189,7 +189,7 @@ pub fn check(
 #[serde(rename_all = "lowercase")]
 pub enum Contact {
     /// The material's surface compliance on a fine grid of the top face
-    /// ([`crate::sim::surface_probe`]); elsewhere, the model's surface nodes.
+    /// ([`crate::sim::material_surface`]); elsewhere, the model's surface nodes.
     #[default]
     Surface,
     /// The running model's surface nodes, projected out of the sphere.

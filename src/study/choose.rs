@@ -193,7 +193,9 @@ pub fn choose(points: &[ChartPoint], object: crate::mechanics::object::Object, b
         let accurate = budget.accurate(p) && contact.is_ok();
         let verdict = match (accurate, tick <= budget_s) {
             (true, true) => match contact {
-                Ok(ProbeContact { contact: Some(Contact::Surface), .. }) => "meets both (probe: the surface compliance)".to_owned(),
+                Ok(ProbeContact { contact: Some(Contact::Surface), .. }) => {
+                    "meets both (probe: the surface compliance)".to_owned()
+                }
                 _ => "meets both".to_owned(),
             },
             (false, true) if !budget.accurate(p) => format!("too inaccurate ({})", budget.why_inaccurate(p)),

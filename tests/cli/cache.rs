@@ -11,8 +11,8 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use tissue_sim::mechanics::material::Material;
-use tissue_sim::response::surface_compliance::{DEFAULT_DIVISIONS, SurfaceCompliance};
-use tissue_sim::sim::surface_probe::file_name;
+use tissue_sim::sim::material_surface::compliance::{DEFAULT_DIVISIONS, SurfaceCompliance};
+use tissue_sim::sim::material_surface::file_name;
 
 use crate::*;
 

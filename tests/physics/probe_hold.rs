@@ -4,8 +4,8 @@
 //! the held force swung between 0 and 2.2 to 3.5 times its settled value.
 
 use tissue_sim::mechanics::material::Material;
-use tissue_sim::response::surface_compliance::ContactScratch;
-use tissue_sim::sim::surface_probe::load_or_compute;
+use tissue_sim::sim::material_surface::compliance::ContactScratch;
+use tissue_sim::sim::material_surface::load_or_compute;
 use tissue_sim::study::script::{Script, run};
 
 /// Holds a press for `hold_s` (eased in over 1 s, as a hand presses: with no damping at all, the modes a press excites ring on) and returns the force samples of the second

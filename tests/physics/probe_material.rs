@@ -3,7 +3,7 @@
 //! `assets/continuum/`, and the slide across the top face smooth.
 
 use tissue_sim::mechanics::material::Material;
-use tissue_sim::response::surface_compliance::{ContactScratch, DEFAULT_DIVISIONS, SurfaceCompliance};
+use tissue_sim::sim::material_surface::compliance::{ContactScratch, DEFAULT_DIVISIONS, SurfaceCompliance};
 use tissue_sim::validate::continuum::DEFAULT_TOLERANCE;
 use tissue_sim::validate::continuum::cache::ContinuumCache;
 use tissue_sim::validate::probe::presses::press_cases;

@@ -13,8 +13,8 @@ use tissue_sim::mechanics::grid::Grid;
 use tissue_sim::mechanics::material::Material;
 use tissue_sim::render::camera::OrbitCamera;
 use tissue_sim::render::mesh::SurfaceMesh;
-use tissue_sim::response::surface_compliance::ContactScratch;
 use tissue_sim::sim::Tool;
+use tissue_sim::sim::material_surface::compliance::ContactScratch;
 use tissue_sim::validate::continuum::cache::ContinuumCache;
 use tissue_sim::validate::continuum::{DEFAULT_TOLERANCE, Press};
 
@@ -110,7 +110,7 @@ fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_m
     // held press settles to) against the material's own.
     let material = Material::object_a();
     let dir = tissue_sim::io::cache_dir();
-    let compliance = tissue_sim::sim::surface_probe::load_or_compute(&material, dir.as_deref(), &mut |_| true)
+    let compliance = tissue_sim::sim::material_surface::load_or_compute(&material, dir.as_deref(), &mut |_| true)
         .expect("the surface compliance");
     let viewer = compliance.press(centre, radius, &mut ContactScratch::default()).expect("a press")[2];
     let mut kept = ContinuumCache::open(&material, dir.as_deref());
@@ -138,9 +138,10 @@ fn the_viewers_press_recorded_replays_to_its_forces() {
     let mut sim = Simulation::with_tissue(tissue, Integrator::Prefactored, 1e-4, Some(&case));
     let _ = sim.set_integrator(None, 1e-4);
     let dir = tissue_sim::io::cache_dir();
-    let surface = tissue_sim::sim::surface_probe::MaterialSurface::load_or_compute(&material, dir.as_deref(), &mut |_| true)
-        .expect("the surface compliance");
-    sim.set_surface_probe(Some(tissue_sim::sim::surface_probe::SurfaceProbe::on(&surface, grid, Some(0.2))));
+    let surface =
+        tissue_sim::sim::material_surface::MaterialSurface::load_or_compute(&material, dir.as_deref(), &mut |_| true)
+            .expect("the surface compliance");
+    sim.set_surface_probe(Some(tissue_sim::sim::material_surface::SurfaceProbe::on(&surface, grid, Some(0.2))));
     let mut timeline = Timeline::new(true);
     let step = |timeline: &mut Timeline, sim: &mut Simulation, seconds: f64| {
         for _ in 0..(seconds / sim.dt).round() as usize {

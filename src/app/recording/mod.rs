@@ -53,8 +53,17 @@ const REST_ENERGY_J: f64 = 1e-12;
 enum Current {
     Wait,
     /// A drag target set, its first step not yet taken.
-    Drag { node: usize, to: [f64; 3] },
-    Probe { radius: f64, direction: [f64; 3], keys: Vec<PathKey>, now: ([f64; 3], f64), next_sample: f64 },
+    Drag {
+        node: usize,
+        to: [f64; 3],
+    },
+    Probe {
+        radius: f64,
+        direction: [f64; 3],
+        keys: Vec<PathKey>,
+        now: ([f64; 3], f64),
+        next_sample: f64,
+    },
 }
 
 /// What was recorded, as the physics thread hands it over.
@@ -226,7 +235,7 @@ impl Timeline {
     }
 
     /// Once a tick: a recording waiting for rest starts when the tissue has been at rest, nothing
-    /// held, for [`REST_TICKS`].
+    /// held, for 100 ticks.
     pub fn tick(&mut self, sim: &Simulation) {
         if let Some(n) = &mut self.waiting {
             let rest = sim.tool == Tool::None && sim.tissue.kinetic_energy() < REST_ENERGY_J;
@@ -318,7 +327,8 @@ pub fn save(physics: &super::physics::PhysicsThread, state: &super::state::Viewe
         .filter(|_| taken)
         .context("recording not written: the physics thread did not hand it over")?;
     let script = state.recording_script(rec).context("recording not written")?;
-    crate::io::write_json_atomic(path, &script).with_context(|| format!("recording not written to {}", path.display()))?;
+    crate::io::write_json_atomic(path, &script)
+        .with_context(|| format!("recording not written to {}", path.display()))?;
     let samples = script.recorded.as_ref().map_or(0, |r| r.force_path.len());
     Ok(format!(
         "recording: {} actions and {samples} force samples written to {} (replay: tissue-sim simulate --script {} \

@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use super::super::physics::Command;
-use crate::sim::surface_probe::MaterialSurface;
+use crate::sim::material_surface::MaterialSurface;
 
 use super::super::calibration_job;
 use super::{ProbeComparison, ViewerState};

@@ -19,7 +19,10 @@ impl ViewerState {
                 p.name == m.name && p.stiffness == m.stiffness && p.density == m.density
             })
             .ok_or_else(|| {
-                anyhow::anyhow!("the material \"{}\" is not one of the paper's objects, and a script names A or B", m.name)
+                anyhow::anyhow!(
+                    "the material \"{}\" is not one of the paper's objects, and a script names A or B",
+                    m.name
+                )
             })?;
         let model = self.shown.model();
         let mut notes: Vec<String> = rec.note.into_iter().collect();

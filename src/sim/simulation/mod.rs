@@ -62,7 +62,7 @@ pub struct Simulation {
     /// Nodes on the cube's surface: the only ones the probe touches.
     surface: Vec<usize>,
     /// The probe on the material's surface compliance, when set.
-    surface_probe: Option<crate::sim::surface_probe::SurfaceProbe>,
+    surface_probe: Option<crate::sim::material_surface::SurfaceProbe>,
     /// Whether this step's probe force came from the surface compliance.
     probe_on_surface: bool,
     contact_forces: [Vec<f64>; 3],

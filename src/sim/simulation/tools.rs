@@ -10,7 +10,7 @@ use glam::DVec3;
 impl Simulation {
     /// Sets the probe's contact: on the material's surface compliance (`Some`), or the running
     /// model's surface nodes (`None`).
-    pub fn set_surface_probe(&mut self, probe: Option<crate::sim::surface_probe::SurfaceProbe>) {
+    pub fn set_surface_probe(&mut self, probe: Option<crate::sim::material_surface::SurfaceProbe>) {
         self.surface_probe = probe;
     }
 
@@ -40,7 +40,7 @@ impl Simulation {
         }
         let on_surface = match (self.tool, self.surface_probe.as_mut()) {
             (Tool::Probe { centre, radius }, Some(probe))
-                if crate::sim::surface_probe::SurfaceProbe::covers(centre) =>
+                if crate::sim::material_surface::SurfaceProbe::covers(centre) =>
             {
                 match probe.update(centre, radius, self.dt) {
                     Ok(force) => Some(force),
@@ -308,12 +308,15 @@ mod tests {
         let mut sim = Simulation::with_tissue(tissue.expect("hex"), Integrator::Symplectic, 1e-4, Some(&case));
         let base = sim.tissue.f_ext_mut().clone();
         let compliance =
-            crate::response::surface_compliance::SurfaceCompliance::compute(&material, 10, &mut |_| true).expect("c");
-        let surface = crate::sim::surface_probe::MaterialSurface {
+            crate::sim::material_surface::compliance::SurfaceCompliance::compute(&material, 10, &mut |_| true)
+                .expect("c");
+        let surface = crate::sim::material_surface::MaterialSurface {
             compliance: std::sync::Arc::new(compliance),
-            modes: std::sync::Arc::new(crate::sim::modal_lag::ModalBasis::of_material(&material).expect("modes")),
+            modes: std::sync::Arc::new(
+                crate::sim::material_surface::modal_lag::ModalBasis::of_material(&material).expect("modes"),
+            ),
         };
-        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::on(&surface, grid, Some(0.2))));
+        sim.set_surface_probe(Some(crate::sim::material_surface::SurfaceProbe::on(&surface, grid, Some(0.2))));
         for i in 0..20 {
             let centre = [0.03 + 1e-3 * i as f64, 0.05, 0.1 + 0.015 - 0.003];
             sim.tool = Tool::Probe { centre, radius: 0.015 };
@@ -330,14 +333,14 @@ mod tests {
     /// model's nodes under the surface's name.
     #[test]
     fn a_surface_contact_that_cannot_be_solved_is_an_error_not_a_fallback() {
-        use crate::response::surface_compliance::SurfaceCompliance;
+        use crate::sim::material_surface::compliance::SurfaceCompliance;
         let material = Material::object_a();
         let tissue = Model::Lattice(crate::mechanics::msm::Topology::Hex).build(&material, None, 0.2).expect("hex");
         let grid = tissue.grid();
         let case = LoadCase::bottom_clamp(&grid, "A");
         let mut sim = Simulation::with_tissue(tissue, Integrator::Symplectic, 1e-4, Some(&case));
         let singular = std::sync::Arc::new(SurfaceCompliance::uniform(4, 0.0));
-        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::new(singular, grid)));
+        sim.set_surface_probe(Some(crate::sim::material_surface::SurfaceProbe::new(singular, grid)));
         sim.tool = Tool::Probe { centre: [0.05, 0.05, 0.1 + 0.015 - 0.004], radius: 0.015 };
         let e = sim.step().expect_err("the contact cannot be solved");
         assert!(e.fatal && e.message.contains("contact on the material's surface failed"), "{e:?}");

@@ -14,7 +14,7 @@ use crate::mechanics::cases::LoadCase;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::sim::TICK_S;
-use crate::sim::surface_probe::MaterialSurface;
+use crate::sim::material_surface::MaterialSurface;
 use crate::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Tissue};
 use crate::study::timing::time_fallible;
 

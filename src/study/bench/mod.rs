@@ -92,14 +92,14 @@ fn probe_tick_here(
     let tissue = model.build(&material, None, crate::response::damping::DEFAULT_DAMPING_RATIO)?;
     let mut sim = Simulation::with_tissue(tissue, integrator, dt, Some(&LoadCase::bottom_clamp(&grid, "A")));
     if run != ProbeRun::NodesStill {
-        let mut report = crate::sim::surface_probe::stderr_report();
-        let c = crate::sim::surface_probe::MaterialSurface::load_or_compute(
+        let mut report = crate::sim::material_surface::stderr_report();
+        let c = crate::sim::material_surface::MaterialSurface::load_or_compute(
             &material,
             crate::io::cache_dir().as_deref(),
             &mut |e| report.event(e),
         )?;
         let zeta = sim.tissue.damping().ratio();
-        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::on(&c, grid, zeta)));
+        sim.set_surface_probe(Some(crate::sim::material_surface::SurfaceProbe::on(&c, grid, zeta)));
     }
     let r = crate::validate::touch::PROBE_RADIUS_M;
     let z = crate::mechanics::grid::CUBE_SIDE_M + r - 0.004;

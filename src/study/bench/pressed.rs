@@ -4,7 +4,7 @@
 //! held until its ringing dies down before the ticks are timed.
 
 use crate::mechanics::cases::LoadCase;
-use crate::sim::surface_probe::{MaterialSurface, SurfaceProbe};
+use crate::sim::material_surface::{MaterialSurface, SurfaceProbe};
 use crate::sim::{Integrator, Simulation, TICK_S, Tissue, Tool};
 
 /// How deep the probe presses, m.

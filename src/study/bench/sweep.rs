@@ -14,7 +14,7 @@ use crate::gpu::Compute;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::sim::TICK_S;
-use crate::sim::surface_probe::MaterialSurface;
+use crate::sim::material_surface::MaterialSurface;
 use crate::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model};
 use crate::study::bench::pressed::{scene, time_tick};
 
@@ -128,7 +128,7 @@ pub fn sweep_model(
 
 /// Runs the sweep (minutes: the 32^3 factorisations and corotational steps dominate).
 pub fn run() -> anyhow::Result<Sweep> {
-    let mut report = crate::sim::surface_probe::stderr_report();
+    let mut report = crate::sim::material_surface::stderr_report();
     let surface =
         MaterialSurface::load_or_compute(&Material::object_a(), crate::io::cache_dir().as_deref(), &mut |e| {
             report.event(e)

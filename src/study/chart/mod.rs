@@ -32,8 +32,8 @@ use crate::mechanics::material::Material;
 use crate::mechanics::object::Object;
 use crate::mechanics::sparse::SparseError;
 pub use crate::response::single_mode::damped_explicit_limit;
-use crate::response::surface_compliance::ContactScratch;
 use crate::sim::Model;
+use crate::sim::material_surface::compliance::ContactScratch;
 pub use crate::sim::shipped::msm_params_at;
 use crate::validate::continuum::cache::ContinuumCache;
 use crate::validate::probe::score::worst_validation_error;
@@ -121,9 +121,9 @@ fn dynamic_references(
 /// The material's surface compliance as the probe's contact: its worst validation error against
 /// the material, percent, and its time per 1 ms tick with the probe sliding (one contact solve).
 fn surface_probe_figures(material: &Material, kept: &mut ContinuumCache) -> anyhow::Result<ProbeFigures> {
-    let mut report = crate::sim::surface_probe::stderr_report();
+    let mut report = crate::sim::material_surface::stderr_report();
     let compliance =
-        crate::sim::surface_probe::load_or_compute(material, crate::io::cache_dir().as_deref(), &mut |e| {
+        crate::sim::material_surface::load_or_compute(material, crate::io::cache_dir().as_deref(), &mut |e| {
             report.event(e)
         })?;
     let mut scratch = ContactScratch::default();

@@ -107,7 +107,7 @@ pub struct ChartPoint {
     #[serde(default = "not_scored")]
     pub probe_err_pct: f64,
     /// The same with the material's surface compliance as the probe's contact
-    /// ([`crate::sim::surface_probe`]), whatever the model: one figure per object.
+    /// ([`crate::sim::material_surface`]), whatever the model: one figure per object.
     #[serde(default = "not_scored")]
     pub surface_probe_err_pct: f64,
     /// Wall time the surface compliance adds to a 1 ms tick with the probe sliding (one contact

@@ -17,7 +17,7 @@
 //!     { "wait":    { "duration_s": 0.5 } } ] }
 //! ```
 //! `contact` is `surface` (default, the viewer's: the probe's force comes from the material's
-//! surface compliance on a 2 mm grid of the top face, [`crate::sim::surface_probe`], computed
+//! surface compliance on a 2 mm grid of the top face, [`crate::sim::material_surface`], computed
 //! once per material and kept in the cache folder) or `nodes` (the running model's surface nodes
 //! are projected out of the sphere). `nodes` is the grid's nodes per axis (default 8, the viewer's; 4 to [`MAX_SCRIPT_NODES`]): a
 //! lattice takes its shipped 8^3 tissue carried to that grid
@@ -251,15 +251,15 @@ pub fn run(script: &Script) -> anyhow::Result<Outcome> {
     check_steps(script, sim.dt)?;
     let probes = script.actions.iter().any(|a| matches!(a, Action::Probe { .. } | Action::ProbePath { .. }));
     if script.contact == Contact::Surface && probes {
-        let mut report = crate::sim::surface_probe::stderr_report();
-        let surface = crate::sim::surface_probe::MaterialSurface::load_or_compute(
+        let mut report = crate::sim::material_surface::stderr_report();
+        let surface = crate::sim::material_surface::MaterialSurface::load_or_compute(
             &material,
             crate::io::cache_dir().as_deref(),
             &mut |e| report.event(e),
         )
         .map_err(|e| anyhow::anyhow!("script: the probe's surface compliance: {e:#}"))?;
         let zeta = sim.tissue.damping().ratio();
-        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::on(&surface, grid, zeta)));
+        sim.set_surface_probe(Some(crate::sim::material_surface::SurfaceProbe::on(&surface, grid, zeta)));
     }
     let rest = grid.positions();
     let mut out = Outcome {

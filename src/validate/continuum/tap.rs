@@ -108,7 +108,6 @@ impl TapRun {
         Ok(Self { fem, mass, window, w3 })
     }
 
-
     /// The contact of the unconstrained answer `u` for the sphere at `centre`
     /// ([`contact::solve`], warm-started from the last step's contact where it is within a
     /// radius): the window slots in contact and their forces along the normals, in `scratch`.
@@ -120,6 +119,8 @@ impl TapRun {
         }));
         let candidates = &scratch.candidates;
         scratch.active.retain(|&q| candidates[q].1 > -PROBE_RADIUS_M);
+        // With the candidates that came inside the sphere since.
+        scratch.active.extend((0..candidates.len()).filter(|&q| candidates[q].1 > 0.0));
         contact::solve(&mut Window(self), scratch, 1e-12)?;
         Ok(())
     }

@@ -22,7 +22,7 @@ use crate::mechanics::msm::{MsmModel, MsmParams};
 use crate::response::damping::Damping;
 use crate::response::modal::{ModalModel, Mode};
 use crate::response::single_mode::{self, ModeMotion};
-use crate::sim::surface_probe::MaterialSurface;
+use crate::sim::material_surface::MaterialSurface;
 use crate::sim::{Integrator, Model, Tissue};
 use crate::validate::continuum::tap::ContinuumTap;
 use crate::validate::dynamic::reference::{self as dynamic_reference, ReferenceTransient, Trajectory, Transient};
@@ -87,7 +87,7 @@ impl References {
             let tap = crate::validate::continuum::cache::tap(material, zeta, dir.as_deref(), &mut |s| {
                 eprintln!("the material's tap ({}): {s}", material.name);
             })?;
-            let mut report = crate::sim::surface_probe::stderr_report();
+            let mut report = crate::sim::material_surface::stderr_report();
             let compliance = MaterialSurface::load_or_compute(material, dir.as_deref(), &mut |e| report.event(e))?;
             Some((tap, compliance))
         } else {

@@ -59,8 +59,8 @@ pub fn responder_force_n(responder: &mut Responder, press: &Press) -> anyhow::Re
 
 /// The force along the press's direction with the material's surface compliance as contact.
 pub fn compliance_force_n(
-    compliance: &crate::response::surface_compliance::SurfaceCompliance,
-    scratch: &mut crate::response::surface_compliance::ContactScratch,
+    compliance: &crate::sim::material_surface::compliance::SurfaceCompliance,
+    scratch: &mut crate::sim::material_surface::compliance::ContactScratch,
     press: &Press,
 ) -> anyhow::Result<f64> {
     Ok(press.force_along(compliance.press(press.centre(), press.radius, scratch)?))

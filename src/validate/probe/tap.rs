@@ -7,7 +7,7 @@
 use glam::DVec3;
 
 use crate::mechanics::cases::LoadCase;
-use crate::sim::surface_probe::MaterialSurface;
+use crate::sim::material_surface::MaterialSurface;
 use crate::sim::{Integrator, Tissue, Tool};
 use crate::validate::dynamic::reference::{self as dynamic_reference, Trajectory};
 
@@ -28,7 +28,7 @@ pub fn run(
     let mut sim = crate::sim::Simulation::with_tissue(tissue, integrator, dt, Some(&clamp));
     if let Some(s) = surface {
         let zeta = sim.tissue.damping().ratio();
-        sim.set_surface_probe(Some(crate::sim::surface_probe::SurfaceProbe::on(s, grid, zeta)));
+        sim.set_surface_probe(Some(crate::sim::material_surface::SurfaceProbe::on(s, grid, zeta)));
     }
     let steps_for = |duration: f64| {
         let n = (duration / dt).round();

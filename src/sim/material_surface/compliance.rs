@@ -11,7 +11,7 @@
 
 use glam::DVec3;
 
-use super::contact;
+use crate::response::contact;
 
 use crate::mechanics::fem::graded::{GradedFem, GradedMesh, graded_axis};
 use crate::mechanics::grid::CUBE_SIDE_M;
@@ -168,6 +168,7 @@ impl SurfaceCompliance {
 
     /// The 3 x 3 block `W[a][b]`: displacement `a` of face node `q` under a unit force `b` at
     /// face node `p`, metres per newton.
+    #[inline]
     pub fn block(&self, p: usize, q: usize) -> [[f64; 3]; 3] {
         let (side, half) = (self.side(), self.half());
         let (pi, pj) = (p % side, p / side);
@@ -238,6 +239,7 @@ impl SurfaceCompliance {
     }
 
     /// `nq . W(q <- p) np`.
+    #[inline(always)]
     fn normal_normal(&self, p: usize, np: [f64; 3], q: usize, nq: [f64; 3]) -> f64 {
         let w = self.block(p, q);
         let mut v = 0.0;
@@ -256,6 +258,7 @@ struct FaceNodes<'a> {
 }
 
 impl contact::Compliance for FaceNodes<'_> {
+    #[inline(always)]
     fn normal(&self, i: usize, n_i: [f64; 3], j: usize, n_j: [f64; 3]) -> f64 {
         self.compliance.normal_normal(self.nodes[j], n_j, self.nodes[i], n_i)
     }

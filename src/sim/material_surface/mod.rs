@@ -1,6 +1,9 @@
-//! The probe's force from the material's surface compliance
-//! ([`crate::response::surface_compliance`]): the rigid sphere against a fine grid of the top
-//! face, whatever model shows the tissue. The contact forces are carried to the running model's
+//! The probe on the material's surface, in one folder: [`compliance`] (the top face's contact
+//! compliance of a fine FEM, computed once per material and kept, [`compliance::file`] its
+//! format), [`modal_lag`] (the material's slow modes) and, here, the probe that joins them.
+//!
+//! The probe's force comes from the material's surface compliance: the rigid sphere against a
+//! fine grid of the top face, whatever model shows the tissue. The contact forces are carried to the running model's
 //! top-face nodes (bilinear weights) as loads, so the view deforms under the force the hand
 //! feels. The compliance is computed once per material (about a minute, 60 MB) and kept in a cache
 //! folder.
@@ -12,17 +15,18 @@
 //! steady), found by a relaxed fixed point (at most [`MAX_LAG_ITERATIONS`] presses, from the last
 //! solve's lag); the modes are then advanced exactly over the span under the contact's forces.
 
+pub mod compliance;
+pub mod modal_lag;
+
 use std::path::Path;
 use std::sync::Arc;
 
 use crate::io::cache::{CacheEvent, KeptFile, StderrReport};
 
-use super::modal_lag::{ModalBasis, ModalLag};
 use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
-use crate::response::surface_compliance::{
-    ComplianceError, ContactScratch, DEFAULT_DIVISIONS, MAX_CONTACT_NODES, SurfaceCompliance,
-};
+use compliance::{ComplianceError, ContactScratch, DEFAULT_DIVISIONS, MAX_CONTACT_NODES, SurfaceCompliance};
+use modal_lag::{ModalBasis, ModalLag};
 
 /// Presses per step at most while finding the lag's fixed point.
 pub const MAX_LAG_ITERATIONS: usize = 6;
@@ -239,7 +243,7 @@ pub fn file_name(material: &Material) -> String {
     format!(
         "surface-compliance-{:016x}.bin",
         crate::io::cache_key(
-            (crate::response::surface_compliance::METHOD_VERSION, DEFAULT_DIVISIONS),
+            (crate::sim::material_surface::compliance::METHOD_VERSION, DEFAULT_DIVISIONS),
             material.stiffness.iter(),
         )
     )

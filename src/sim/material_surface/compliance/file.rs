@@ -86,7 +86,7 @@ fn u32_at(bytes: &[u8], at: usize) -> u32 {
 }
 
 impl SurfaceCompliance {
-    /// The compliance as the bytes of its file ([`crate::response::surface_compliance::file`]'s
+    /// The compliance as the bytes of its file ([`crate::sim::material_surface::compliance::file`]'s
     /// layout), keyed by `material`, the material it was computed for.
     pub fn to_bytes(&self, material: &Material) -> Vec<u8> {
         let mut out = Vec::with_capacity(HEADER_BYTES + 4 * self.columns.len());
