@@ -46,6 +46,7 @@ pub fn show(
     header(ui, shown, ctx);
     // The left-button tool first, where it is always in view (keys p, d, c).
     tools::tool_picker(ui, settings);
+    tools::recording(ui, settings, requests);
     ui.separator();
     egui::CollapsingHeader::new("Object and model")
         .default_open(true)

@@ -10,8 +10,8 @@ use crate::app::state::{Request, Shown, ToolKind, ViewSettings};
 use crate::mechanics::cases::FORCES_N;
 use crate::sim::Tool;
 
-/// With `view --record`: the button that writes the recording now.
-fn recording(ui: &mut egui::Ui, settings: &ViewSettings, requests: &mut Vec<Request>) {
+/// With `view --record`: the button that writes the recording now (at the top, beside the tools).
+pub fn recording(ui: &mut egui::Ui, settings: &ViewSettings, requests: &mut Vec<Request>) {
     let Some(path) = &settings.recording else { return };
     ui.horizontal_wrapped(|ui| {
         let save = ui.button("Save recording").on_hover_text(
@@ -33,7 +33,6 @@ pub fn show(
     requests: &mut Vec<Request>,
 ) {
     ui.label("Left mouse: the tool; right mouse: rotate; wheel: zoom.");
-    recording(ui, settings, requests);
     if settings.tool == ToolKind::Probe {
         probe_settings(ui, settings);
     }
