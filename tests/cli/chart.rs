@@ -35,13 +35,15 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     assert!(std::fs::read_to_string(out.join("chart.svg")).expect("svg").contains("<svg"));
     let chart = out.join("chart.csv");
     let chart_s = chart.to_str().expect("utf8");
-    let o = run(&["choose", "--chart", chart_s, "--max-error", "5", "--rate", "1000"]);
+    // A rate every model meets on any machine: the round trip is tested here, not the speed (that
+    // is `bench`'s; with other tests running beside it a 1 ms tick is not assured).
+    let o = run(&["choose", "--chart", chart_s, "--max-error", "5", "--rate", "100"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("Chosen:") && text.contains("probe force error"), "{text}");
     // Dynamic budgets beside the static one.
     let o =
-        run(&["choose", "--chart", chart_s, "--max-period-error", "2", "--max-damping-error", "1", "--rate", "1000"]);
+        run(&["choose", "--chart", chart_s, "--max-period-error", "2", "--max-damping-error", "1", "--rate", "100"]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("period error <= 2 %") && text.contains("damping ratio error <= 1 % of critical"), "{text}");
     let o = run(&["choose", "--chart", chart_s, "--max-damping-error", "0"]);

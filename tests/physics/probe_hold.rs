@@ -11,18 +11,22 @@ use tissue_sim::study::script::{Script, run};
 /// Holds a press for `hold_s` (eased in over 1 s, as a hand presses: with no damping at all, the modes a press excites ring on) and returns the force samples of the second
 /// half of the hold, newtons.
 fn held(at: [f64; 2], radius: f64, depth: f64, zeta: f64, hold_s: f64) -> Vec<f64> {
-    let [x, y] = at;
+    held_along([at[0], at[1], 0.1], [0.0, 0.0, -1.0], radius, depth, zeta, hold_s)
+}
+
+/// [`held`] at any point `at` of the surface, pushed along `direction`.
+fn held_along(at: [f64; 3], direction: [f64; 3], radius: f64, depth: f64, zeta: f64, hold_s: f64) -> Vec<f64> {
     // The press eased in and out (smoothstep keys over 1 s), then held.
     let mut keys: Vec<serde_json::Value> = (0..=20)
         .map(|i| {
             let u = f64::from(i) / 20.0;
-            serde_json::json!({ "t": u, "at": [x, y, 0.1], "depth": depth * u * u * (3.0 - 2.0 * u) })
+            serde_json::json!({ "t": u, "at": at, "depth": depth * u * u * (3.0 - 2.0 * u) })
         })
         .collect();
-    keys.push(serde_json::json!({ "t": 1.0 + hold_s, "at": [x, y, 0.1], "depth": depth }));
+    keys.push(serde_json::json!({ "t": 1.0 + hold_s, "at": at, "depth": depth }));
     let script = serde_json::json!({
         "object": "A", "dt": 1e-3, "damping_ratio": zeta,
-        "actions": [{ "probe_path": { "radius": radius, "direction": [0, 0, -1], "sample_hz": 100, "keys": keys } }]
+        "actions": [{ "probe_path": { "radius": radius, "direction": direction, "sample_hz": 100, "keys": keys } }]
     });
     let script: Script = serde_json::from_value(script).expect("a script");
     let out = run(&script).expect("the hold runs");
@@ -52,6 +56,30 @@ fn a_held_press_is_steady_and_settles_to_the_materials_static_force() {
                 assert!(swing < bound, "{what}: the held force swings by {:.3} % of {mean} N", 100.0 * swing);
                 assert!((mean / stat - 1.0).abs() < 0.005, "{what}: held {mean} N against the static {stat} N");
             }
+        }
+    }
+}
+
+/// Off the top face the model's own nodes touch (the material's compliance covers the top face
+/// only): a press held there on a side face, low and high, and across the top edge is steady too.
+#[test]
+fn a_press_held_on_a_side_face_or_an_edge_is_steady() {
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    let presses = [
+        ([0.1, 0.05, 0.05], [-1.0, 0.0, 0.0]),
+        ([0.1, 0.03, 0.02], [-1.0, 0.0, 0.0]),
+        ([0.05, 0.0, 0.06], [0.0, 1.0, 0.0]),
+        ([0.1, 0.05, 0.1], [-s, 0.0, -s]),
+    ];
+    for (at, direction) in presses {
+        for zeta in [0.2, 1.0] {
+            let f = held_along(at, direction, 0.015, 0.004, zeta, 3.0);
+            let mean = f.iter().sum::<f64>() / f.len() as f64;
+            let swing = f.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max) / mean;
+            assert!(
+                mean > 0.0 && swing < 0.005,
+                "{at:?} along {direction:?}, damping {zeta}: mean {mean} N, swing {swing}"
+            );
         }
     }
 }
