@@ -108,6 +108,8 @@ impl Default for ViewSettings {
 pub struct Shown {
     /// The material.
     pub material: Material,
+    /// The file the material was read from (none for the paper's objects).
+    pub material_file: Option<std::path::PathBuf>,
     /// The probe's contact: what the surface compliance job says (`None`: ready or not asked).
     pub contact_status: Option<String>,
     /// The parameters of the running model (the panel edits a copy).

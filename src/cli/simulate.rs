@@ -24,7 +24,9 @@ pub struct SimulateArgs {
 pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     crate::io::check_output(&args.out)?;
     let s: crate::study::script::Script = read_json(&args.script)?;
-    let outcome = crate::study::script::run(&s).with_context(|| format!("in {}", args.script.display()))?;
+    let folder = args.script.parent().unwrap_or(std::path::Path::new(""));
+    let outcome =
+        crate::study::script::run_from(&s, folder).with_context(|| format!("in {}", args.script.display()))?;
     outcome.check_finite()?;
     crate::io::write_json_compact(&args.out, &outcome)
 }

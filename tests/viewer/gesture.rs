@@ -161,7 +161,8 @@ fn the_viewers_press_recorded_replays_to_its_forces() {
     let last = rec.force_path.last().expect("force samples").clone();
     assert!((last.depth_m - 0.004).abs() < 1e-6, "recorded indentation {} m for 40 pixels", last.depth_m);
     let script = Script {
-        object: tissue_sim::mechanics::object::Object::A,
+        object: Some(tissue_sim::mechanics::object::Object::A),
+        material: None,
         model,
         dt: rec.dt,
         integrator: Some(rec.integrator),

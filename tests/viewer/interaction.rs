@@ -5,7 +5,8 @@ use tissue_sim::study::script::{Action, Script, run};
 
 fn script(actions: Vec<Action>) -> Script {
     Script {
-        object: tissue_sim::mechanics::object::Object::A,
+        object: Some(tissue_sim::mechanics::object::Object::A),
+        material: None,
         model: tissue_sim::sim::Model::Lattice(tissue_sim::mechanics::msm::Topology::Shear),
         dt: 1e-4,
         integrator: None,
@@ -213,4 +214,32 @@ fn bad_scripts_are_refused_with_a_reason() {
     assert!(run(&s).expect_err("dt too small").to_string().contains("dt"));
     let s = script(vec![Action::Drag { node: 9999, to: [0.0; 3], duration_s: 0.1, record: false }]);
     assert!(run(&s).expect_err("no such node").to_string().contains("node 9999"));
+}
+
+/// A script may name a material file in place of an object, from the script's folder; giving
+/// both, or neither, is refused by name.
+#[test]
+fn a_script_takes_a_material_file_from_its_folder() {
+    let script = |keys: serde_json::Value| -> Script {
+        let mut s = serde_json::json!({
+            "model": "fem-linear", "contact": "nodes",
+            "actions": [{ "probe": { "at": [0.05, 0.05, 0.1], "direction": [0, 0, -1], "radius": 0.015,
+                                     "depth": 0.004, "duration_s": 0.05, "samples": 2 } }]
+        });
+        s.as_object_mut().expect("an object").extend(keys.as_object().expect("keys").clone());
+        serde_json::from_value(s).expect("a script")
+    };
+    let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/examples");
+    let own =
+        tissue_sim::study::script::run_from(&script(serde_json::json!({ "material": "my_tissue.toml" })), &folder)
+            .expect("the material file's script runs");
+    assert_eq!(own.object, "my_tissue");
+    assert!(own.force_depth.last().is_some_and(|s| s.force_n > 0.0));
+    let both = script(serde_json::json!({ "object": "A", "material": "my_tissue.toml" }));
+    let e = tissue_sim::study::script::run_from(&both, &folder).expect_err("both refused");
+    assert!(format!("{e:#}").contains("not both"), "{e:#}");
+    let e = run(&script(serde_json::json!({}))).expect_err("neither refused");
+    assert!(format!("{e:#}").contains("\"material\""), "{e:#}");
+    let e = run(&script(serde_json::json!({ "material": "no/such/file.toml" }))).expect_err("a missing file refused");
+    assert!(format!("{e:#}").contains("no/such/file.toml"), "{e:#}");
 }

@@ -71,7 +71,8 @@ fn a_recorded_interaction_replays_to_the_same_forces() {
         .collect();
     assert_eq!(kinds, ["wait", "probe_path", "release", "wait", "drag", "wait", "drag", "wait", "release", "wait"]);
     let script = Script {
-        object: Object::A,
+        object: Some(Object::A),
+        material: None,
         model: Model::Lattice(crate::sim::shipped::DEFAULT_TOPOLOGY),
         dt: rec.dt,
         integrator: Some(rec.integrator),

@@ -130,6 +130,7 @@ impl ViewerState {
             shown: Shown {
                 contact_status: None,
                 material,
+                material_file: None,
                 params,
                 integrator: None,
                 dt,

@@ -10,15 +10,18 @@ use crate::mechanics::msm::Topology;
 impl ViewerState {
     pub(super) fn load_object(&mut self, topology: Topology, send: &mut dyn FnMut(Command)) {
         self.shown.note = None;
-        let material = match self.settings.object {
-            Source::File => match Material::from_file(std::path::Path::new(self.settings.material_path.trim())) {
-                Ok(m) => m,
-                Err(e) => {
-                    self.shown.note = Some(format!("{e:#}"));
-                    return;
+        let (material, file) = match self.settings.object {
+            Source::File => {
+                let path = std::path::PathBuf::from(self.settings.material_path.trim());
+                match Material::from_file(&path) {
+                    Ok(m) => (m, Some(path)),
+                    Err(e) => {
+                        self.shown.note = Some(format!("{e:#}"));
+                        return;
+                    }
                 }
-            },
-            Source::Object(object) => object.material(),
+            }
+            Source::Object(object) => (object.material(), None),
         };
         let params = crate::sim::shipped::msm_params_at(&material, topology, &self.grid).unwrap_or_else(|_| {
             // No shipped calibration: start from the material-derived scale and suggest calibrating.
@@ -31,6 +34,7 @@ impl ViewerState {
             space.params(&mid)
         });
         self.shown.material = material;
+        self.shown.material_file = file;
         self.shown.params = params;
         self.shown.case_active = None;
         self.shown.fem_answer = None;

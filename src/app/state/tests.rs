@@ -153,3 +153,34 @@ fn the_fem_runs_in_place_of_the_lattice_and_back() {
     let p = wait_until(&physics, |p| p.params.is_some());
     assert_eq!(p.params.map(|p| p.topology()), Some(Topology::Hex));
 }
+
+/// A material loaded from a file is recorded by the file's absolute path, and the script reads
+/// it back from anywhere; the paper's objects by name.
+#[test]
+fn a_recording_names_the_object_or_the_material_file() {
+    let (mut state, physics) = started();
+    let rec = || crate::app::recording::Recording {
+        actions: vec![crate::study::script::Action::Wait { duration_s: 0.01, record: false }],
+        force_path: Vec::new(),
+        integrator: Integrator::Symplectic,
+        dt: 1e-4,
+        damping_ratio: Some(0.2),
+        contact: crate::sim::press::Contact::Nodes,
+        note: None,
+    };
+    let a = state.recording_script(rec()).expect("object A is recorded");
+    assert_eq!((a.object, &a.material), (Some(crate::mechanics::object::Object::A), &None));
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/examples/my_tissue.toml");
+    state.settings.object = crate::app::settings::Source::File;
+    state.settings.material_path = file.display().to_string();
+    state.handle(Request::SelectFem(crate::mechanics::fem::dynamics::Formulation::Linear), &mut |_| {});
+    state.handle(Request::LoadObject, &mut |c| {
+        let _ = physics.send(c);
+    });
+    let script = state.recording_script(rec()).expect("the file's material is recorded");
+    assert!(script.object.is_none() && script.material.as_deref().is_some_and(std::path::Path::is_absolute));
+    let back: crate::study::script::Script =
+        serde_json::from_str(&serde_json::to_string(&script).expect("JSON")).expect("reads back");
+    let out = crate::study::script::run_from(&back, std::path::Path::new("/")).expect("replays from anywhere");
+    assert_eq!(out.object, "my_tissue");
+}

@@ -43,7 +43,7 @@ pub const MAX_SAMPLES_PER_PROBE: usize = 10_000;
 
 /// Every check of a script that does not depend on the step, made before any work: the step, the
 /// bounds on actions and recorded events, and each action's node, points, sizes and samples.
-pub(super) fn check_script(script: &Script) -> anyhow::Result<()> {
+pub(super) fn check_script(script: &Script, object: &str) -> anyhow::Result<()> {
     crate::sim::check_dt(script.dt).map_err(|e| anyhow::anyhow!("script: dt = {e}"))?;
     if !(4..=MAX_SCRIPT_NODES).contains(&script.nodes) {
         anyhow::bail!("script: nodes = {} is out of range (4 to {MAX_SCRIPT_NODES} nodes per axis)", script.nodes);
@@ -56,7 +56,7 @@ pub(super) fn check_script(script: &Script) -> anyhow::Result<()> {
         anyhow::bail!("script: {} actions, above the bound of {MAX_ACTIONS}", script.actions.len());
     }
     // Where the tissue is held, for the presses' check: the model's node nearest a point.
-    let fixed = super::clamp_case(&grid, script.object.name(), &script.clamp)?.map(|c| c.fixed_nodes());
+    let fixed = super::clamp_case(&grid, object, &script.clamp)?.map(|c| c.fixed_nodes());
     let held = |p: [f64; 3]| {
         let (h, top) = (grid.h(), (grid.n() - 1) as f64);
         let at = |v: f64| (v / h).round().clamp(0.0, top) as usize;

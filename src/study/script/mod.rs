@@ -72,8 +72,13 @@ use crate::sim::{Integrator, Model, Simulation, Tool};
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Script {
-    /// `A` or `B`.
-    pub object: crate::mechanics::object::Object,
+    /// `A` or `B` (or `material`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub object: Option<crate::mechanics::object::Object>,
+    /// A material file (TOML or JSON, as `--material` reads) in place of `object`; a relative path
+    /// is taken from the script's folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<std::path::PathBuf>,
     /// `hex` (the default tissue), `shear`, `axis`, `fem-linear` or `fem-corotational`.
     #[serde(default = "default_model")]
     pub model: Model,
@@ -226,10 +231,31 @@ fn tissue(script: &Script, grid: Grid, material: &Material) -> anyhow::Result<Bo
     script.compute.place(tissue).map_err(|e| anyhow::anyhow!("script: compute \"{}\": {e}", script.compute.name()))
 }
 
-/// Runs a script.
+impl Script {
+    /// The script's material: its object's, or its material file's (a relative path from
+    /// `folder`, the script's).
+    pub fn material_from(&self, folder: &std::path::Path) -> anyhow::Result<Material> {
+        match (&self.object, &self.material) {
+            (Some(o), None) => Ok(o.material()),
+            (None, Some(file)) => {
+                let path = folder.join(file);
+                Material::from_file(&path).map_err(|e| anyhow::anyhow!("script: material {}: {e:#}", path.display()))
+            }
+            (Some(_), Some(_)) => anyhow::bail!("script: give \"object\" or \"material\", not both"),
+            (None, None) => anyhow::bail!("script: \"object\" (A or B) or \"material\" (a material file) is needed"),
+        }
+    }
+}
+
+/// Runs a script (a material file's relative path taken from the working folder).
 pub fn run(script: &Script) -> anyhow::Result<Outcome> {
-    let material = script.object.material();
-    check_script(script)?;
+    run_from(script, std::path::Path::new(""))
+}
+
+/// Runs a script read from `folder` (where a relative material path starts).
+pub fn run_from(script: &Script, folder: &std::path::Path) -> anyhow::Result<Outcome> {
+    let material = script.material_from(folder)?;
+    check_script(script, &material.name)?;
     let grid = Grid::new(script.nodes)?;
     let tissue = tissue(script, grid, &material)?;
     let case = clamp_case(&grid, &material.name, &script.clamp)?;
