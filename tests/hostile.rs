@@ -277,8 +277,7 @@ fn presses_the_contact_cannot_resolve_are_refused_with_their_reason() {
 }
 
 /// A probe never pulls, and every sample says which contact produced its force: pressed to 3/4
-/// of its radius on the top face (the material's surface compliance) and on a side face (the
-/// model's nodes, off the compliance's face).
+/// of its radius on the top face and on a side face (both the material's surface compliance).
 #[test]
 fn a_probe_never_pulls_and_each_force_says_its_contact() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -300,8 +299,7 @@ fn a_probe_never_pulls_and_each_force_says_its_contact() {
     for sample in samples {
         let f = sample["force_n"].as_f64().expect("force");
         assert!(f >= 0.0, "a probe pulled: {sample}");
-        let side = sample["action"] == 2;
-        assert_eq!(sample["contact"], if side { "nodes" } else { "surface" }, "{sample}");
+        assert_eq!(sample["contact"], "surface", "{sample}");
     }
     let deepest = samples.iter().filter(|s| s["action"] == 0).map(|s| s["force_n"].as_f64().unwrap_or(0.0));
     assert!(deepest.fold(0.0, f64::max) > 20.0, "the press at 3/4 of the radius pushes back");

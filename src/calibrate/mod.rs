@@ -335,7 +335,7 @@ pub fn check_cases(set: CaseSet, topology: Topology, grid: Grid) -> Result<(), C
     Ok(())
 }
 
-/// How many of the training presses ([`crate::validate::probe::presses`]) touch a node of
+/// How many of the training presses on the top face ([`crate::validate::probe::presses`]) touch a node of
 /// `grid`: a free surface node inside the sphere at rest, which is what starts the node contact
 /// of [`crate::response::linear::SceneSolver::probe`]. A press that touches none has no contact
 /// and no force, whatever the stiffness.
@@ -343,7 +343,7 @@ pub fn touching_presses(grid: Grid) -> usize {
     let fixed = crate::response::linear::scene_fixed_dofs(&grid);
     crate::validate::probe::presses::press_cases()
         .iter()
-        .filter(|c| c.set == crate::validate::touch::Set::Training)
+        .filter(|c| c.set == crate::validate::touch::Set::Training && c.on_top_face())
         .filter(|c| {
             let geometry = crate::response::linear::sphere_geometry(&grid, c.press.centre(), c.press.radius);
             (0..grid.num_nodes()).any(|p| !fixed[3 * p] && grid.on_boundary(p) && geometry[p].1 > 0.0)

@@ -40,7 +40,7 @@ pub struct ValidateArgs {
     #[arg(long)]
     pub own_mesh_only: bool,
     /// How the probe touches in the presses against the material: `surface` (the viewer's: the
-    /// material's surface compliance on a 2 mm grid of the top face, computed once per
+    /// material's surface compliance on a 2 mm lattice of the free surface, computed once per
     /// material, about a minute, and kept in the cache folder) or `nodes` (the model's surface nodes).
     #[arg(long, default_value = "surface")]
     pub contact: crate::sim::press::Contact,

@@ -209,19 +209,23 @@ impl Grid {
         (0..m).flat_map(move |k| (0..m).flat_map(move |j| (0..m).map(move |i| self.element_nodes(i, j, k))))
     }
 
-    /// The grid columns `[i, j]` around `(x, y)` in a face plane (metres, clamped to the face)
-    /// and their bilinear weights: the one rule that spreads a point of the top face onto nodes.
-    pub fn face_corners(&self, x: f64, y: f64) -> [([usize; 2], f64); 4] {
+    /// The nodes of the cell holding the point `x` (clamped into the cube) and their trilinear
+    /// weights: on a face, the face's nodes only (the others weigh 0); the one interpolation of a
+    /// point onto the grid.
+    pub fn corners(&self, x: [f64; 3]) -> [(usize, f64); 8] {
         let (n, h) = (self.n(), self.h());
-        let (u, v) = ((x / h).clamp(0.0, (n - 1) as f64), (y / h).clamp(0.0, (n - 1) as f64));
-        let (i, j) = ((u.floor() as usize).min(n - 2), (v.floor() as usize).min(n - 2));
-        let (fu, fv) = (u - i as f64, v - j as f64);
-        [
-            ([i, j], (1.0 - fu) * (1.0 - fv)),
-            ([i + 1, j], fu * (1.0 - fv)),
-            ([i, j + 1], (1.0 - fu) * fv),
-            ([i + 1, j + 1], fu * fv),
-        ]
+        let mut base = [0usize; 3];
+        let mut frac = [0.0; 3];
+        for c in 0..3 {
+            let u = (x[c] / h).clamp(0.0, (n - 1) as f64);
+            base[c] = (u.floor() as usize).min(n - 2);
+            frac[c] = u - base[c] as f64;
+        }
+        std::array::from_fn(|corner| {
+            let o = [corner & 1, (corner >> 1) & 1, corner >> 2];
+            let w = (0..3).map(|c| if o[c] == 1 { frac[c] } else { 1.0 - frac[c] }).product();
+            (self.node(base[0] + o[0], base[1] + o[1], base[2] + o[2]), w)
+        })
     }
 
     /// Nodes on the face `coordinate[axis] = 0` (`high = false`) or `= L` (`high = true`), in

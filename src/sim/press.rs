@@ -6,7 +6,7 @@
 //! - the sphere is smaller than the material's surface grid resolves ([`MIN_RADIUS_M`]: its
 //!   contact patch would span about one node of the 2 mm face grid);
 //! - it is wider than the contact holds ([`MAX_RADIUS_M`], and at most
-//!   [`MAX_CONTACT_NODES`] face nodes under it on the top face);
+//!   [`MAX_CONTACT_NODES`] surface nodes under it);
 //! - it goes deeper than it can be pressed ([`MAX_DEPTH_OF_RADIUS`] of its radius: beyond, the
 //!   contact linearised along the normals at rest turns the nodes past the sphere's equator and
 //!   the force falls, then pulls);
@@ -129,7 +129,7 @@ pub fn check_radius(radius: f64) -> Result<(), String> {
 
 /// Checks one press (`direction` non-zero; `fixed(p)`: whether the tissue is held at the surface
 /// point `p`). `surface`: the force comes from the material's surface compliance, whose contact
-/// holds at most [`MAX_CONTACT_NODES`] nodes of the top face.
+/// holds at most [`MAX_CONTACT_NODES`] nodes of the surface.
 pub fn check(
     at: [f64; 3],
     direction: [f64; 3],
@@ -169,13 +169,12 @@ pub fn check(
             "the probe point {at:?} is on a clamped face: the support, not the material, would push back"
         ));
     }
-    let top = at[2] >= CUBE_SIDE_M - ON_SURFACE_M;
-    if surface && top {
+    if surface {
         let nodes = window_count(DEFAULT_DIVISIONS, centre(at, dir, radius, depth), radius);
         if nodes > MAX_CONTACT_NODES {
             return Err(format!(
                 "a probe of radius {} mm pressed {} mm is wider than the contact can hold: it covers {nodes} nodes \
-                 of the top face, above the bound of {MAX_CONTACT_NODES}",
+                 of the surface, above the bound of {MAX_CONTACT_NODES}",
                 crate::io::num(radius * 1e3),
                 crate::io::num(depth * 1e3)
             ));
@@ -188,8 +187,8 @@ pub fn check(
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Contact {
-    /// The material's surface compliance on a fine grid of the top face
-    /// ([`crate::sim::material_surface`]); elsewhere, the model's surface nodes.
+    /// The material's surface compliance on a fine lattice of the free surface
+    /// ([`crate::sim::material_surface`]).
     #[default]
     Surface,
     /// The running model's surface nodes, projected out of the sphere.

@@ -60,26 +60,40 @@ fn a_held_press_is_steady_and_settles_to_the_materials_static_force() {
     }
 }
 
-/// Off the top face the model's own nodes touch (the material's compliance covers the top face
-/// only): a press held there on a side face, low and high, and across the top edge is steady too.
+/// On every free face, across an edge and into a corner (the material's surface compliance
+/// covers the whole free surface): a press held is steady, with and without damping, and settles
+/// to the material's static force there.
 #[test]
-fn a_press_held_on_a_side_face_or_an_edge_is_steady() {
+fn a_press_held_on_every_face_an_edge_or_a_corner_is_steady() {
+    let material = Material::object_a();
+    let dir = tissue_sim::io::cache_dir();
+    let compliance = load_or_compute(&material, dir.as_deref(), &mut |_| true).expect("the surface compliance");
+    let mut scratch = ContactScratch::default();
     let s = std::f64::consts::FRAC_1_SQRT_2;
+    let t = 1.0 / 3f64.sqrt();
     let presses = [
         ([0.1, 0.05, 0.05], [-1.0, 0.0, 0.0]),
         ([0.1, 0.03, 0.02], [-1.0, 0.0, 0.0]),
+        ([0.0, 0.07, 0.04], [1.0, 0.0, 0.0]),
         ([0.05, 0.0, 0.06], [0.0, 1.0, 0.0]),
+        ([0.06, 0.1, 0.08], [0.0, -1.0, 0.0]),
         ([0.1, 0.05, 0.1], [-s, 0.0, -s]),
+        ([0.1, 0.1, 0.1], [-t, -t, -t]),
     ];
+    let (radius, depth) = (0.015, 0.004);
     for (at, direction) in presses {
-        for zeta in [0.2, 1.0] {
-            let f = held_along(at, direction, 0.015, 0.004, zeta, 3.0);
+        let centre = tissue_sim::sim::press::centre(at, glam::DVec3::from(direction), radius, depth);
+        let f = compliance.press(centre, radius, &mut scratch).expect("a press");
+        let stat = -(0..3).map(|c| f[c] * direction[c]).sum::<f64>();
+        for zeta in [0.0, 0.2, 1.0] {
+            let f = held_along(at, direction, radius, depth, zeta, 3.0);
             let mean = f.iter().sum::<f64>() / f.len() as f64;
             let swing = f.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max) / mean;
-            assert!(
-                mean > 0.0 && swing < 0.005,
-                "{at:?} along {direction:?}, damping {zeta}: mean {mean} N, swing {swing}"
-            );
+            let what = format!("{at:?} along {direction:?}, damping ratio {zeta}");
+            // Undamped, the modes the press excites ring on (measured: up to 1.41 % on the +y face).
+            let bound = if zeta == 0.0 { 0.02 } else { 0.005 };
+            assert!(mean > 0.0 && swing < bound, "{what}: mean {mean} N, swing {:.3} %", 100.0 * swing);
+            assert!((mean / stat - 1.0).abs() < 0.005, "{what}: held {mean} N against the static {stat} N");
         }
     }
 }

@@ -114,7 +114,7 @@ fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_m
         .expect("the surface compliance");
     let viewer = compliance.press(centre, radius, &mut ContactScratch::default()).expect("a press")[2];
     let mut kept = ContinuumCache::open(&material, dir.as_deref());
-    let press = Press { at, radius, depth };
+    let press = Press::normal(at, radius, depth);
     let truth = kept.force(&material, &press, DEFAULT_TOLERANCE, &mut |_| {}).expect("the material's force").force_n;
     kept.save();
     assert!((viewer / truth - 1.0).abs() < 0.07, "the viewer's {viewer} N against the material's {truth} N");
@@ -181,7 +181,7 @@ fn the_viewers_press_recorded_replays_to_its_forces() {
     assert!(cmp.relative_l2 < 0.01, "{cmp:?}");
     let mut kept = ContinuumCache::open(&material, dir.as_deref());
     let at = [last.at[0], last.at[1], 0.1];
-    let press = Press { at, radius: 0.015, depth: last.depth_m };
+    let press = Press::normal(at, 0.015, last.depth_m);
     let truth = kept.force(&material, &press, DEFAULT_TOLERANCE, &mut |_| {}).expect("the material's force").force_n;
     kept.save();
     assert!((last.force_n / truth - 1.0).abs() < 0.07, "recorded {} N against the material's {truth} N", last.force_n);

@@ -1,13 +1,18 @@
-//! The contact compliance of the material's top face: how every node of a fine, uniform grid on
-//! the face z = 0.1 m moves under a unit force at any other, from the hex8 FEM of the clamped cube
-//! (face z = 0 held) on a mesh uniform in x and y and graded in z. With it, the force of a rigid
-//! frictionless sphere pressed into the top face anywhere is a small dense contact problem on the
-//! face nodes under the sphere: the material's force at the tool, whatever coarser model shows
-//! the tissue (SOFA's precomputed constraint correction, here of a fine mesh of the material).
+//! The contact compliance of the material's free surface: how every node of a uniform lattice
+//! on the top face and the four side faces (2 mm) moves under a unit force at another, from the
+//! hex8 FEM of the clamped cube (face z = 0 held) on meshes uniform along a face and graded away
+//! from it ([`lattice`]: the top face's mesh, the x faces', the y faces'). With it, the force of a
+//! rigid frictionless sphere pressed anywhere into the free surface, across an edge or into a
+//! corner, is a small dense contact problem on the surface nodes under the sphere: the material's
+//! force at the tool, whatever coarser model shows the tissue (SOFA's precomputed constraint
+//! correction, here of a fine mesh of the material).
 //!
-//! The cube and its (orthotropic, axis-aligned) material are symmetric under `x -> L - x` and
-//! `y -> L - y`, so only the columns of one quadrant's nodes are computed and kept. The contact
-//! solve ([`SurfaceCompliance::press`]) allocates nothing: it works in a [`ContactScratch`].
+//! The cube and its (orthotropic, axis-aligned) material are mirror-symmetric in x and y, and
+//! away from the edges the compliance barely changes along a face, so only about a twentieth of
+//! the nodes' columns are solved and kept ([`lattice`]). The contact's normal compliance of two
+//! nodes is the mean of what either's column says (the two differ where a column is shifted or
+//! another face's mesh holds it), so that it is symmetric. The contact solve
+//! ([`SurfaceCompliance::press`]) allocates nothing: it works in a [`ContactScratch`].
 
 use glam::DVec3;
 
@@ -19,25 +24,27 @@ use crate::mechanics::material::Material;
 use crate::mechanics::sparse::SparseError;
 
 pub mod file;
+pub mod lattice;
 pub use file::{FILE_FORMAT, FILE_MAGIC, FileError, METHOD_VERSION};
+use lattice::{Lattice, Source};
 
-/// Divisions of the face per axis: 2 mm spacing.
+/// Divisions of a face per axis: 2 mm spacing.
 pub const DEFAULT_DIVISIONS: usize = 50;
-/// Depth of the fine layer under the face, metres; the mesh grows by [`GROWTH`] below it.
+/// Depth of the fine layer under a face, metres; the mesh grows by [`GROWTH`] below it.
 const FINE_DEPTH_M: f64 = 0.01;
-/// Growth of the element height below the fine layer.
+/// Growth of the element size away from the fine layer.
 const GROWTH: f64 = 1.45;
-/// Quadrant nodes whose columns are solved in one batch.
+/// Column nodes solved in one batch.
 const BATCH_NODES: usize = 16;
-/// Most face nodes one contact may involve (the window under the sphere).
+/// Most surface nodes one contact may involve (the window under the sphere).
 pub const MAX_CONTACT_NODES: usize = 600;
 
-/// The top face's compliance at the nodes of a uniform face grid.
+/// The free surface's compliance at the nodes of a uniform surface lattice.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SurfaceCompliance {
-    divisions: usize,
-    /// Per quadrant node `k = i + half j` (`i, j < half`), per force component `b`, per face node
-    /// `q`, per displacement component `a`: metres per newton.
+    lattice: Lattice,
+    /// Per family, per solved column node, per force component `b`, per target, per displacement
+    /// component `a`: metres per newton.
     columns: Vec<f32>,
 }
 
@@ -65,27 +72,17 @@ pub enum ComplianceError {
 }
 
 impl SurfaceCompliance {
-    /// Quadrant nodes per axis.
-    fn half(&self) -> usize {
-        self.divisions / 2 + 1
-    }
-
     /// A compliance of `divisions` divisions per axis with every entry `value`, metres per newton
     /// (for tests of what uses one).
     #[cfg(test)]
     pub(crate) fn uniform(divisions: usize, value: f32) -> Self {
-        let (side, half) = (divisions + 1, divisions / 2 + 1);
-        Self { divisions, columns: vec![value; half * half * 3 * side * side * 3] }
+        let lattice = Lattice::new(divisions);
+        Self { columns: vec![value; lattice.values], lattice }
     }
 
-    /// Face nodes per axis.
-    pub fn side(&self) -> usize {
-        self.divisions + 1
-    }
-
-    /// Face node spacing, metres.
+    /// Lattice spacing, metres.
     pub fn spacing(&self) -> f64 {
-        CUBE_SIDE_M / self.divisions as f64
+        CUBE_SIDE_M / self.lattice.divisions as f64
     }
 
     /// Bytes held.
@@ -93,7 +90,7 @@ impl SurfaceCompliance {
         self.columns.len() * 4
     }
 
-    /// Computes the compliance of `material` with `divisions` face divisions per axis (even);
+    /// Computes the compliance of `material` with `divisions` divisions per axis (even);
     /// `progress(fraction)` is called between batches (about a second apart) and stops the work
     /// when it returns `false`.
     pub fn compute(
@@ -109,91 +106,79 @@ impl SurfaceCompliance {
         if coupled || !divisions.is_multiple_of(2) || divisions < 2 {
             return Err(ComplianceError::NotOrthotropic);
         }
-        let l = CUBE_SIDE_M;
-        let s = l / divisions as f64;
-        let xy: Vec<f64> = (0..=divisions).map(|i| if i == divisions { l } else { i as f64 * s }).collect();
-        let z = graded_axis(l, l, s, FINE_DEPTH_M, GROWTH);
-        let mesh = GradedMesh { axes: [xy.clone(), xy, z] };
-        let top = mesh.dims()[2] - 1;
-        if !progress(0.0) {
-            return Err(ComplianceError::Cancelled);
-        }
-        let mut fem = GradedFem::clamped_bottom(mesh, material)?;
-        if !progress(0.0) {
-            return Err(ComplianceError::Cancelled);
-        }
-        let side = divisions + 1;
-        let half = divisions / 2 + 1;
-        let n = fem.fixed.len();
-        let face = side * side;
-        let mut columns = vec![0.0f32; half * half * 3 * face * 3];
-        let quadrant: Vec<[usize; 2]> = (0..half).flat_map(|j| (0..half).map(move |i| [i, j])).collect();
+        let lattice = Lattice::new(divisions);
+        let total: usize = lattice.families.iter().map(lattice::Family::columns).sum();
+        let mut columns = vec![0.0f32; lattice.values];
         let mut done = 0;
-        for batch in quadrant.chunks(BATCH_NODES) {
-            let cols = 3 * batch.len();
-            let mut rhs = vec![0.0; n * cols];
-            for (b, &[i, j]) in batch.iter().enumerate() {
-                let p = fem.mesh.node([i, j, top]);
-                for c in 0..3 {
-                    rhs[(3 * b + c) * n + 3 * p + c] = 1.0;
-                }
+        for f in &lattice.families {
+            if !progress(done as f64 / total as f64) {
+                return Err(ComplianceError::Cancelled);
             }
-            fem.solve_columns(&mut rhs, cols)?;
-            for (b, &[i, j]) in batch.iter().enumerate() {
-                let k = i + half * j;
-                for c in 0..3 {
-                    let col = &rhs[(3 * b + c) * n..(3 * b + c + 1) * n];
-                    let out = &mut columns[(3 * k + c) * face * 3..(3 * k + c + 1) * face * 3];
-                    for q in 0..face {
-                        let node = fem.mesh.node([q % side, q / side, top]);
-                        for a in 0..3 {
-                            out[3 * q + a] = col[3 * node + a] as f32;
+            let mut fem = GradedFem::clamped_bottom(family_mesh(f.axis, divisions), material)?;
+            // Each target as the mesh's two nodes across the graded axis and the weight of the second.
+            let at: Vec<(usize, usize, f64)> =
+                f.targets.iter().map(|&q| mesh_point(&fem.mesh, f.axis, q, divisions)).collect();
+            let n = fem.fixed.len();
+            let per = 3 * at.len();
+            let nodes: Vec<usize> = (0..f.columns()).collect();
+            for batch in nodes.chunks(BATCH_NODES) {
+                let cols = 3 * batch.len();
+                let mut rhs = vec![0.0; n * cols];
+                for (b, &k) in batch.iter().enumerate() {
+                    let (p, _, _) = mesh_point(&fem.mesh, f.axis, f.column_point(k, divisions), divisions);
+                    for c in 0..3 {
+                        rhs[(3 * b + c) * n + 3 * p + c] = 1.0;
+                    }
+                }
+                fem.solve_columns(&mut rhs, cols)?;
+                for (b, &k) in batch.iter().enumerate() {
+                    for c in 0..3 {
+                        let col = &rhs[(3 * b + c) * n..(3 * b + c + 1) * n];
+                        let start = f.offset + (3 * k + c) * per;
+                        for (out, &(lo, hi, w)) in columns[start..start + per].chunks_exact_mut(3).zip(&at) {
+                            for a in 0..3 {
+                                out[a] = ((1.0 - w) * col[3 * lo + a] + w * col[3 * hi + a]) as f32;
+                            }
                         }
                     }
                 }
-            }
-            done += batch.len();
-            if !progress(done as f64 / quadrant.len() as f64) {
-                return Err(ComplianceError::Cancelled);
+                done += batch.len();
+                if !progress(done as f64 / total as f64) {
+                    return Err(ComplianceError::Cancelled);
+                }
             }
         }
-        Ok(Self { divisions, columns })
+        Ok(Self { lattice, columns })
     }
 
-    /// Rest position of face node `q`, metres.
+    /// Rest position of surface node `q`, metres.
     pub fn position(&self, q: usize) -> [f64; 3] {
         let s = self.spacing();
-        [(q % self.side()) as f64 * s, (q / self.side()) as f64 * s, CUBE_SIDE_M]
+        let d = self.lattice.divisions;
+        self.lattice.point(q).map(|c| if c == d { CUBE_SIDE_M } else { c as f64 * s })
     }
 
-    /// The 3 x 3 block `W[a][b]`: displacement `a` of face node `q` under a unit force `b` at
-    /// face node `p`, metres per newton.
-    #[inline]
-    pub fn block(&self, p: usize, q: usize) -> [[f64; 3]; 3] {
-        let (side, half) = (self.side(), self.half());
-        let (pi, pj) = (p % side, p / side);
-        let (qi, qj) = (q % side, q / side);
-        // Mirror p into the quadrant; q goes with it.
-        let (mi, sx) = if pi < half { (pi, 1.0) } else { (side - 1 - pi, -1.0) };
-        let (mj, sy) = if pj < half { (pj, 1.0) } else { (side - 1 - pj, -1.0) };
-        let qi = if sx < 0.0 { side - 1 - qi } else { qi };
-        let qj = if sy < 0.0 { side - 1 - qj } else { qj };
-        let sign = [sx, sy, 1.0];
-        let k = mi + half * mj;
-        let face = side * side;
-        let at = 3 * (qi + side * qj);
-        let mut w = [[0.0; 3]; 3];
-        for (b, &sb) in sign.iter().enumerate() {
-            let col = &self.columns[(3 * k + b) * face * 3 + at..][..3];
-            for (a, &sa) in sign.iter().enumerate() {
-                w[a][b] = sa * sb * f64::from(col[a]);
-            }
+    /// `n_q . W(q <- p) n_p` from the column `p`'s `source` finds, or `None` where it does not
+    /// hold `q`.
+    #[inline(always)]
+    fn along(&self, source: &Source, n_p: [f64; 3], q: [usize; 3], n_q: [f64; 3]) -> Option<f64> {
+        let t = self.lattice.target(source, q)?;
+        let f = &self.lattice.families[source.family as usize];
+        let sign =
+            [f64::from(u8::from(!source.flip[0])) * 2.0 - 1.0, f64::from(u8::from(!source.flip[1])) * 2.0 - 1.0, 1.0];
+        let per = 3 * f.targets.len();
+        let base = f.offset + 3 * source.column as usize * per + 3 * t;
+        let mut v = 0.0;
+        for b in 0..3 {
+            let col = &self.columns[base + b * per..][..3];
+            let w = col[0] as f64 * n_q[0] * sign[0] + col[1] as f64 * n_q[1] * sign[1] + col[2] as f64 * n_q[2];
+            v += w * n_p[b] * sign[b];
         }
-        w
+        Some(v)
     }
 
-    /// The force of the face on a rigid frictionless sphere (`centre`, `radius`, metres) held
-    /// against it at rest, newtons: every face node the sphere covers is put on it along the
+    /// The force of the surface on a rigid frictionless sphere (`centre`, `radius`, metres) held
+    /// against it at rest, newtons: every surface node the sphere covers is put on it along the
     /// sphere's normal ([`contact::solve`], warm-started from the last solve's contact where it
     /// is still near the sphere). The contact nodes and their normal forces stay in `scratch`.
     pub fn press(
@@ -202,93 +187,150 @@ impl SurfaceCompliance {
         radius: f64,
         scratch: &mut ContactScratch,
     ) -> Result<[f64; 3], ComplianceError> {
-        let ContactScratch { contact: c, nodes, previous } = scratch;
+        let ContactScratch { contact: c, nodes, points, sources, previous } = scratch;
         c.candidates.clear();
         c.active.clear();
         c.lambda.clear();
         nodes.clear();
-        if centre[2] - radius >= CUBE_SIDE_M {
+        points.clear();
+        sources.clear();
+        let outside = (0..3).map(|a| (-centre[a]).max(centre[a] - CUBE_SIDE_M).max(0.0).powi(2)).sum::<f64>().sqrt();
+        if outside >= radius {
             previous.clear();
             return Ok([0.0; 3]);
         }
+        let d = self.lattice.divisions;
         let mut too_large = false;
-        for_window(self.divisions, centre, radius, |q, d| {
+        for_window(d, centre, radius, |q, x| {
+            let Some(index) = self.lattice.index(q) else { return true };
             if nodes.len() == MAX_CONTACT_NODES {
                 too_large = true;
                 return false;
             }
-            nodes.push(q);
-            let x = (DVec3::from(centre) + d).to_array();
-            c.candidates.push(contact::sphere_gap(centre, radius, x, [0.0, 0.0, -1.0]));
+            nodes.push(index);
+            points.push(q);
+            sources.push(self.lattice.source(q));
+            c.candidates.push(contact::sphere_gap(centre, radius, x, outward(q, d)));
             true
         });
         if too_large {
-            return Err(ComplianceError::TooLarge(window_count(self.divisions, centre, radius)));
+            return Err(ComplianceError::TooLarge(window_count(d, centre, radius)));
         }
         for (w, &q) in nodes.iter().enumerate() {
             if previous.binary_search(&q).is_ok() && c.candidates[w].1 > -self.spacing() {
                 c.active.push(w);
             }
         }
-        let solved = contact::solve(&mut FaceNodes { compliance: self, nodes }, c, 1e-9 * radius);
+        let solved = contact::solve(&mut SurfaceNodes { compliance: self, points, sources }, c, 1e-9 * radius);
         previous.clear();
         solved?;
         previous.extend(c.active.iter().map(|&w| nodes[w]));
         previous.sort_unstable();
         Ok(c.force())
     }
+}
 
-    /// `nq . W(q <- p) np`.
-    #[inline(always)]
-    fn normal_normal(&self, p: usize, np: [f64; 3], q: usize, nq: [f64; 3]) -> f64 {
-        let w = self.block(p, q);
-        let mut v = 0.0;
-        for a in 0..3 {
-            v += nq[a] * (w[a][0] * np[0] + w[a][1] * np[1] + w[a][2] * np[2]);
+/// The outward normal of the surface at lattice point `q` (the sum of its faces' on an edge).
+fn outward(q: [usize; 3], d: usize) -> [f64; 3] {
+    let n = DVec3::from_array(q.map(|c| {
+        if c == d {
+            1.0
+        } else if c == 0 {
+            -1.0
+        } else {
+            0.0
         }
-        v
-    }
+    }));
+    n.try_normalize().unwrap_or(DVec3::Z).to_array()
 }
 
-/// The face nodes under the sphere as the contact sees them.
-struct FaceNodes<'a> {
+/// The mesh of a family's faces: uniform along them, graded across (fine under the face at
+/// `axis = L`).
+fn family_mesh(axis: usize, divisions: usize) -> GradedMesh {
+    let l = CUBE_SIDE_M;
+    let s = l / divisions as f64;
+    let uniform: Vec<f64> = (0..=divisions).map(|i| if i == divisions { l } else { i as f64 * s }).collect();
+    // Fine under the kept face (at `axis = L`; its mirror image's columns are its own mirrored).
+    let graded = graded_axis(l, l, s, FINE_DEPTH_M, GROWTH);
+    let mut axes = [uniform.clone(), uniform.clone(), uniform];
+    axes[axis] = graded;
+    GradedMesh { axes }
+}
+
+/// Lattice point `q` on a family's mesh: the nodes on either side of it across the graded `axis`
+/// and the second's weight (0 where `q` is a node).
+fn mesh_point(mesh: &GradedMesh, axis: usize, q: [usize; 3], divisions: usize) -> (usize, usize, f64) {
+    let x = q[axis] as f64 * CUBE_SIDE_M / divisions as f64;
+    let line = &mesh.axes[axis];
+    let hi = line.partition_point(|&y| y < x - 1e-12).clamp(1, line.len() - 1);
+    let (a, b) = (line[hi - 1], line[hi]);
+    let (lo, w) = if (x - b).abs() <= 1e-12 { (hi, 0.0) } else { (hi - 1, (x - a) / (b - a)) };
+    let node = |i: usize| {
+        let mut ijk = q;
+        ijk[axis] = i;
+        mesh.node(ijk)
+    };
+    (node(lo), node((lo + 1).min(line.len() - 1)), w)
+}
+
+/// The surface nodes under the sphere as the contact sees them.
+struct SurfaceNodes<'a> {
     compliance: &'a SurfaceCompliance,
-    /// Face node of each candidate.
-    nodes: &'a [usize],
+    /// Lattice point of each candidate.
+    points: &'a [[usize; 3]],
+    /// How each candidate's column is found.
+    sources: &'a [Source],
 }
 
-impl contact::Compliance for FaceNodes<'_> {
+impl contact::Compliance for SurfaceNodes<'_> {
     #[inline(always)]
     fn normal(&self, i: usize, n_i: [f64; 3], j: usize, n_j: [f64; 3]) -> f64 {
-        self.compliance.normal_normal(self.nodes[j], n_j, self.nodes[i], n_i)
+        let c = self.compliance;
+        let by_j = c.along(&self.sources[j], n_j, self.points[i], n_i);
+        if i == j {
+            return by_j.unwrap_or(0.0);
+        }
+        match (by_j, c.along(&self.sources[i], n_i, self.points[j], n_j)) {
+            (Some(a), Some(b)) => 0.5 * (a + b),
+            (Some(a), None) | (None, Some(a)) => a,
+            (None, None) => 0.0,
+        }
     }
 }
 
-/// Calls `f(node, node - centre)` for every face node (of a face with `divisions` divisions per
-/// axis) that a sphere's contact considers: within a face spacing of the sphere's surface; `f`
-/// returns `false` to stop. The one rule of the contact's window.
-fn for_window(divisions: usize, centre: [f64; 3], radius: f64, mut f: impl FnMut(usize, DVec3) -> bool) {
-    let side = divisions + 1;
-    let s = CUBE_SIDE_M / divisions as f64;
+/// Calls `f(point, position)` for every lattice point of the free surface (of `divisions`
+/// divisions per axis; and of the clamped bottom, which the caller leaves out) within a lattice
+/// spacing of the sphere's surface, or inside it; `f` returns `false` to stop. The one rule of the
+/// contact's window.
+fn for_window(divisions: usize, centre: [f64; 3], radius: f64, mut f: impl FnMut([usize; 3], [f64; 3]) -> bool) {
+    let d = divisions;
+    let s = CUBE_SIDE_M / d as f64;
     let reach = radius + s;
-    let lo = |x: f64| (((x - reach) / s).floor().max(0.0)) as usize;
-    let hi = |x: f64| (((x + reach) / s).ceil().max(0.0) as usize).min(side - 1);
+    let lo = |x: f64| (((x - reach) / s).floor().max(0.0) as usize).min(d);
+    let hi = |x: f64| (((x + reach) / s).ceil().max(0.0) as usize).min(d);
     let c = DVec3::from(centre);
-    for j in lo(centre[1])..=hi(centre[1]) {
-        for i in lo(centre[0])..=hi(centre[0]) {
-            let d = DVec3::new(i as f64 * s, j as f64 * s, CUBE_SIDE_M) - c;
-            if d.length() < radius + s && !f(i + side * j, d) {
-                return;
+    let at = |i: usize| if i == d { CUBE_SIDE_M } else { i as f64 * s };
+    for k in lo(centre[2])..=hi(centre[2]) {
+        for j in lo(centre[1])..=hi(centre[1]) {
+            let side = j == 0 || j == d;
+            for i in lo(centre[0])..=hi(centre[0]) {
+                if !(k == d || side || i == 0 || i == d) {
+                    continue;
+                }
+                let x = [at(i), at(j), at(k)];
+                if (DVec3::from(x) - c).length() < reach && !f([i, j, k], x) {
+                    return;
+                }
             }
         }
     }
 }
 
-/// How many face nodes a sphere's contact considers ([`SurfaceCompliance::press`]'s window).
+/// How many surface nodes a sphere's contact considers ([`SurfaceCompliance::press`]'s window).
 pub fn window_count(divisions: usize, centre: [f64; 3], radius: f64) -> usize {
     let mut count = 0;
-    for_window(divisions, centre, radius, |_, _| {
-        count += 1;
+    for_window(divisions, centre, radius, |q, _| {
+        count += usize::from(q[2] > 0);
         true
     });
     count
@@ -296,17 +338,21 @@ pub fn window_count(divisions: usize, centre: [f64; 3], radius: f64) -> usize {
 
 /// Preallocated memory of [`SurfaceCompliance::press`].
 pub struct ContactScratch {
-    /// The contact's memory: the face nodes near the sphere as candidates (outward normal from
+    /// The contact's memory: the surface nodes near the sphere as candidates (outward normal from
     /// the centre, depth inside the sphere), those in contact and their normal forces.
     pub contact: contact::ContactScratch,
-    /// The face node of each candidate.
+    /// The surface node of each candidate.
     pub nodes: Vec<usize>,
-    /// The face nodes in contact at the last solve, increasing (the next solve's warm start).
+    /// Its lattice point.
+    points: Vec<[usize; 3]>,
+    /// How its column is found.
+    sources: Vec<Source>,
+    /// The surface nodes in contact at the last solve, increasing (the next solve's warm start).
     previous: Vec<usize>,
 }
 
 impl ContactScratch {
-    /// The contact of the last press: face node, outward normal, normal force (newtons).
+    /// The contact of the last press: surface node, outward normal, normal force (newtons).
     pub fn contacts(&self) -> impl Iterator<Item = (usize, [f64; 3], f64)> + '_ {
         let c = &self.contact;
         c.active.iter().zip(&c.lambda).map(|(&w, &l)| (self.nodes[w], c.candidates[w].0, l))
@@ -325,6 +371,8 @@ impl Default for ContactScratch {
         Self {
             contact: contact::ContactScratch::with_room(m),
             nodes: Vec::with_capacity(m),
+            points: Vec::with_capacity(m),
+            sources: Vec::with_capacity(m),
             previous: Vec::with_capacity(m),
         }
     }

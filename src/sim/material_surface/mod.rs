@@ -1,12 +1,12 @@
-//! The probe on the material's surface, in one folder: [`compliance`] (the top face's contact
-//! compliance of a fine FEM, computed once per material and kept, [`compliance::file`] its
+//! The probe on the material's surface, in one folder: [`compliance`] (the free surface's contact
+//! compliance of fine FEM meshes, computed once per material and kept, [`compliance::file`] its
 //! format), [`modal_lag`] (the material's slow modes) and, here, the probe that joins them.
 //!
 //! The probe's force comes from the material's surface compliance: the rigid sphere against a
-//! fine grid of the top face, whatever model shows the tissue. The contact forces are carried to the running model's
-//! top-face nodes (bilinear weights) as loads, so the view deforms under the force the hand
-//! feels. The compliance is computed once per material (about a minute, 60 MB) and kept in a cache
-//! folder.
+//! fine lattice of the five free faces, whatever model shows the tissue. The contact forces are
+//! carried to the running model's nodes (the trilinear weights of their cell, on the surface
+//! those of its face) as loads, so the view deforms under the force the hand feels. The
+//! compliance is computed once per material (about a minute) and kept in a cache folder.
 //!
 //! With the material's lowest modes ([`ModalLag`]) the force is dynamic: the sphere meets the
 //! surface where the static answer puts it plus the lag of the slow modes behind their static
@@ -65,7 +65,7 @@ impl SurfaceProbe {
             grid,
             last: None,
             force: [0.0; 3],
-            loads: Vec::with_capacity(4 * MAX_CONTACT_NODES),
+            loads: Vec::with_capacity(8 * MAX_CONTACT_NODES),
             lag: None,
             delta: [0.0; 3],
             relaxation: 0.5,
@@ -142,7 +142,8 @@ impl SurfaceProbe {
         // The lag `d` solves `d = g(d)`, `g` the modes' lag at the span's end under the contact
         // of the sphere moved by `-d`; Aitken-relaxed fixed point (Irons and Tuck) from the last
         // solve's `d`.
-        let (x, y) = (centre[0], centre[1]);
+        // Where the lag is read: the surface point nearest the sphere's centre.
+        let point = centre.map(|c| c.clamp(0.0, CUBE_SIDE_M));
         let mut d = self.delta;
         let still = self.last == Some((centre, radius));
         if still && self.since_solve_s < self.span * (1.0 - 1e-9) {
@@ -158,7 +159,7 @@ impl SurfaceProbe {
             lag.set_contact(
                 scratch.contacts().map(|(q, normal, lambda)| (compliance.position(q), normal.map(|c| c * lambda))),
             );
-            let g = lag.lag_after(x, y, span);
+            let g = lag.lag_after(point, span);
             let r: [f64; 3] = std::array::from_fn(|c| g[c] - d[c]);
             if r.iter().all(|v| v.abs() < LAG_TOLERANCE_M) {
                 break;
@@ -187,13 +188,11 @@ impl SurfaceProbe {
     fn press(&mut self, centre: [f64; 3], radius: f64) -> Result<(), ComplianceError> {
         self.force = self.compliance.press(centre, radius, &mut self.scratch)?;
         self.loads.clear();
-        let n = self.grid.n();
         for (q, normal, lambda) in self.scratch.contacts() {
-            let x = self.compliance.position(q);
             let f = normal.map(|c| c * lambda);
-            for ([i, j], wgt) in self.grid.face_corners(x[0], x[1]) {
+            for (node, wgt) in self.grid.corners(self.compliance.position(q)) {
                 if wgt > 0.0 {
-                    self.loads.push((self.grid.node(i, j, n - 1), f.map(|c| c * wgt)));
+                    self.loads.push((node, f.map(|c| c * wgt)));
                 }
             }
         }
@@ -204,20 +203,12 @@ impl SurfaceProbe {
     pub fn loads(&self) -> &[(usize, [f64; 3])] {
         &self.loads
     }
-
-    /// Whether a sphere centred at `centre` presses the top face (the face the compliance
-    /// covers): its centre is over the face and in the cube's upper half.
-    pub fn covers(centre: [f64; 3]) -> bool {
-        (0.0..=CUBE_SIDE_M).contains(&centre[0])
-            && (0.0..=CUBE_SIDE_M).contains(&centre[1])
-            && centre[2] > CUBE_SIDE_M * 0.5
-    }
 }
 
 /// What the probe needs of a material: its surface compliance and its slow modes.
 #[derive(Debug, Clone)]
 pub struct MaterialSurface {
-    /// The top face's contact compliance.
+    /// The free surface's contact compliance.
     pub compliance: Arc<SurfaceCompliance>,
     /// The lowest modes.
     pub modes: Arc<ModalBasis>,

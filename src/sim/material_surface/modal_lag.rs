@@ -21,12 +21,12 @@ use crate::mechanics::material::Material;
 /// Modes kept.
 pub const MODES: usize = 192;
 
-/// The material's lowest modes on the top face.
+/// The material's lowest modes.
 #[derive(Debug, Clone)]
 pub struct ModalBasis {
     grid: Grid,
     omega: Vec<f64>,
-    /// Shapes on the top face's nodes: `shape[k][3 (i + n j) + c]`, mass-normalised.
+    /// Shapes on the grid's nodes: `shape[k][3 p + c]`, mass-normalised.
     shape: Vec<Vec<f64>>,
 }
 
@@ -55,7 +55,6 @@ impl ModalBasis {
             .self_adjoint_eigen(faer::Side::Lower)
             .map_err(|e| format!("the material's modes: the eigensolve failed ({e:?})"))?;
         let (values, vectors) = (eig.S().column_vector(), eig.U());
-        let n = grid.n();
         let count = MODES.min(m);
         let mut omega = Vec::with_capacity(count);
         let mut shape = Vec::with_capacity(count);
@@ -73,9 +72,8 @@ impl ModalBasis {
             }
             omega.push(lambda.sqrt());
             shape.push(
-                (0..n * n)
-                    .flat_map(|t| {
-                        let p = grid.node(t % n, t / n, n - 1);
+                (0..grid.num_nodes())
+                    .flat_map(|p| {
                         [0, 1, 2].map(|c| slot[3 * p + c].map_or(0.0, |i| vectors[(i, k)] * inv_sqrt_mass[i]))
                     })
                     .collect(),
@@ -90,10 +88,9 @@ impl ModalBasis {
         (hz(self.omega[0]), hz(*self.omega.last().unwrap_or(&0.0)))
     }
 
-    /// Top-face nodes (index `i + n j`) around `(x, y)` and their bilinear weights.
-    fn corners(&self, x: f64, y: f64) -> [(usize, f64); 4] {
-        let n = self.grid.n();
-        self.grid.face_corners(x, y).map(|([i, j], w)| (i + n * j, w))
+    /// The grid's nodes around the point `x` and their weights.
+    fn corners(&self, x: [f64; 3]) -> [(usize, f64); 8] {
+        self.grid.corners(x)
     }
 }
 
@@ -107,7 +104,7 @@ pub struct ModalLag {
     qdot: Vec<f64>,
     /// Modal forces of the contact now, N.
     force: Vec<f64>,
-    /// The contact's forces gathered on the basis's top-face nodes, N.
+    /// The contact's forces gathered on the basis's nodes, N.
     node_force: Vec<[f64; 3]>,
     touched: Vec<usize>,
 }
@@ -116,7 +113,7 @@ impl ModalLag {
     /// At rest, damped by the ratio `zeta` at the fundamental (mass-proportional).
     pub fn new(basis: Arc<ModalBasis>, zeta: f64) -> Self {
         let k = basis.omega.len();
-        let nodes = basis.grid.n() * basis.grid.n();
+        let nodes = basis.grid.num_nodes();
         Self {
             half_alpha: zeta * basis.omega.first().copied().unwrap_or(0.0),
             basis,
@@ -140,15 +137,15 @@ impl ModalLag {
         self.set_contact(std::iter::empty());
     }
 
-    /// Sets the modal forces of the contact: forces on the tissue (newtons) at top-face points
-    /// `(x, y)`. Allocates nothing.
+    /// Sets the modal forces of the contact: forces on the tissue (newtons) at surface points `x`.
+    /// Allocates nothing.
     pub fn set_contact(&mut self, forces: impl Iterator<Item = ([f64; 3], [f64; 3])>) {
         for &t in &self.touched {
             self.node_force[t] = [0.0; 3];
         }
         self.touched.clear();
         for (x, f) in forces {
-            for (t, w) in self.basis.corners(x[0], x[1]) {
+            for (t, w) in self.basis.corners(x) {
                 if w == 0.0 {
                     continue;
                 }
@@ -169,19 +166,19 @@ impl ModalLag {
         }
     }
 
-    /// The lag of the surface at the top-face point `(x, y)` behind its static answer under the
-    /// contact set, metres.
-    pub fn lag(&self, x: f64, y: f64) -> [f64; 3] {
-        self.lag_after(x, y, 0.0)
+    /// The lag of the surface at the point `x` behind its static answer under the contact set,
+    /// metres.
+    pub fn lag(&self, x: [f64; 3]) -> [f64; 3] {
+        self.lag_after(x, 0.0)
     }
 
-    /// The lag of the surface at the top-face point `(x, y)` behind its static answer at the end
+    /// The lag of the surface at the point `x` behind its static answer at the end
     /// of `span` seconds with the contact's modal forces held meanwhile, metres: each mode's
     /// exact motion over the span ([`ModalLag::advance`]), so that a contact solved with it is
     /// consistent with the state the modes reach (the step's modal response folded into the
     /// contact: no energy exchanged that is not there). `span = 0` is [`ModalLag::lag`].
-    pub fn lag_after(&self, x: f64, y: f64, span: f64) -> [f64; 3] {
-        let corners = self.basis.corners(x, y);
+    pub fn lag_after(&self, x: [f64; 3], span: f64) -> [f64; 3] {
+        let corners = self.basis.corners(x);
         let mut out = [0.0; 3];
         for (k, shape) in self.basis.shape.iter().enumerate() {
             let w = self.basis.omega[k];
@@ -249,7 +246,7 @@ mod tests {
         let x = [0.05, 0.05, 0.1];
         lag.set_contact([(x, [0.0, 0.0, -1.0])].into_iter());
         // At once the surface lags by the whole static answer of the modes: it is higher.
-        let first = lag.lag(x[0], x[1]);
+        let first = lag.lag(x);
         assert!(first[2] > 0.0, "{first:?}");
         // Stepped in 1 ms steps or 0.1 ms steps: the same motion at the same times.
         let mut fine = lag.clone();
@@ -259,12 +256,12 @@ mod tests {
                 fine.advance(1e-4);
             }
         }
-        let (a, b) = (lag.lag(x[0], x[1]), fine.lag(x[0], x[1]));
+        let (a, b) = (lag.lag(x), fine.lag(x));
         assert!((a[2] - b[2]).abs() < 1e-9 * first[2].abs(), "{a:?} {b:?}");
         for _ in 0..2000 {
             lag.advance(1e-3);
         }
-        let settled = lag.lag(x[0], x[1]);
+        let settled = lag.lag(x);
         assert!(settled[2].abs() < 1e-6 * first[2], "{settled:?}");
     }
 }

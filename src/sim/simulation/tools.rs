@@ -19,8 +19,8 @@ impl Simulation {
         self.surface_probe.is_some()
     }
 
-    /// Puts the tool's loads on the tissue. A probe over the top face takes its force from the
-    /// material's surface compliance where the simulation has one; a contact that cannot be
+    /// Puts the tool's loads on the tissue. A probe takes its force from the material's surface
+    /// compliance where the simulation has one; a contact that cannot be
     /// solved there is an error naming its cause (never another contact's force under its name).
     pub(super) fn apply_tool_load(&mut self) -> Result<(), String> {
         if self.tool == Tool::None {
@@ -39,17 +39,13 @@ impl Simulation {
             self.tool_loaded.clear();
         }
         let on_surface = match (self.tool, self.surface_probe.as_mut()) {
-            (Tool::Probe { centre, radius }, Some(probe))
-                if crate::sim::material_surface::SurfaceProbe::covers(centre) =>
-            {
-                match probe.update(centre, radius, self.dt) {
-                    Ok(force) => Some(force),
-                    Err(e) => {
-                        probe.release();
-                        return Err(format!("the probe's contact on the material's surface failed: {e}"));
-                    }
+            (Tool::Probe { centre, radius }, Some(probe)) => match probe.update(centre, radius, self.dt) {
+                Ok(force) => Some(force),
+                Err(e) => {
+                    probe.release();
+                    return Err(format!("the probe's contact on the material's surface failed: {e}"));
                 }
-            }
+            },
             _ => None,
         };
         if let (Some(force), Some(probe)) = (on_surface, self.surface_probe.as_ref()) {

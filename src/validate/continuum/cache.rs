@@ -342,7 +342,7 @@ mod tests {
     /// An answer to a press no shipped file holds (made up: the file does not care).
     fn entry() -> Entry {
         Entry {
-            press: Press { at: [0.05, 0.05, 0.1], radius: 0.0123, depth: 0.001 },
+            press: Press::normal([0.05, 0.05, 0.1], 0.0123, 0.001),
             tolerance: 0.01,
             result: ContinuumForce {
                 force: [0.0, 0.0, 1.25],

@@ -1,8 +1,11 @@
 //! The probe presses a model's force is scored on against the material
-//! ([`crate::validate::continuum`]): the rigid sphere pressed along -z into the top face over a
-//! node of the viewer's 8^3 grid, between two nodes, at a cell's centre, near the cube's edges and
-//! elsewhere, at several radii and depths. Training presses are the ones a calibration may fit
-//! to; validation presses share no point, and have radii and depths of their own.
+//! ([`crate::validate::continuum`]): the rigid sphere pressed into every free face of the cube,
+//! along the face's inward normal over a node of the viewer's 8^3 grid, between two nodes, at a
+//! cell's centre, near the cube's edges and elsewhere; across an edge (along the normalised sum
+//! of the two faces' inward normals) and into a corner; and obliquely (tilted from the normal),
+//! at several radii and depths. Training presses are the ones a calibration may fit to (the
+//! lattices' calibrations take those on the top face); validation presses share no point, and
+//! have radii and depths of their own.
 
 use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::validate::continuum::Press;
@@ -17,6 +20,16 @@ pub struct PressCase {
     pub set: Set,
     /// The press.
     pub press: Press,
+}
+
+impl PressCase {
+    /// Whether the press is along the top face's normal on the top face (the presses the lattices'
+    /// calibrations fit to).
+    pub fn on_top_face(&self) -> bool {
+        self.press.direction.is_none()
+            && self.press.at[2] == CUBE_SIDE_M
+            && self.press.at[..2].iter().all(|&c| c > 0.0 && c < CUBE_SIDE_M)
+    }
 }
 
 /// Points on the top face in lattice units of the 8^3 grid (spacing 0.1/7 m), what they are
@@ -34,19 +47,45 @@ const POINTS: [(Set, &str, [f64; 2]); 10] = [
     (Set::Validation, "anywhere", [5.6, 5.9]),
 ];
 
+/// Presses elsewhere on the free surface: the set, what the press is, the touched point in lattice
+/// units (on a side face, an edge or a corner) and the pressing direction where it is oblique
+/// (unnormalised; else the inward normal).
+const ELSEWHERE: [(Set, &str, [f64; 3], Option<[f64; 3]>); 15] = [
+    (Set::Training, "side+x", [7.0, 2.0, 3.0], None),
+    (Set::Training, "side-y", [4.5, 0.0, 5.0], None),
+    (Set::Training, "edge-top+x", [7.0, 3.0, 7.0], None),
+    (Set::Training, "oblique-top", [3.0, 2.0, 7.0], Some([0.5, 0.0, -0.866_025_403_784_438_6])),
+    (Set::Validation, "side-x", [0.0, 3.5, 4.0], None),
+    (Set::Validation, "side+x", [7.0, 5.5, 1.5], None),
+    (Set::Validation, "side+y", [2.0, 7.0, 6.0], None),
+    (Set::Validation, "side-y", [6.6, 0.0, 3.0], None),
+    (Set::Validation, "edge-top-y", [4.4, 0.0, 7.0], None),
+    (Set::Validation, "edge-top-x", [0.0, 1.6, 7.0], None),
+    (Set::Validation, "edge+x+y", [7.0, 7.0, 4.0], None),
+    (Set::Validation, "corner", [7.0, 7.0, 7.0], None),
+    (Set::Validation, "oblique-top", [4.0, 4.6, 7.0], Some([-0.3, 0.3, -0.9])),
+    (Set::Validation, "oblique+x", [7.0, 2.5, 3.5], Some([-0.866_025_403_784_438_6, 0.0, 0.5])),
+    (Set::Validation, "oblique-y", [2.2, 0.0, 5.2], Some([0.4, 0.9, -0.3])),
+];
+
 /// Training radii and depths, metres: every combination at every training point.
 const TRAINING: ([f64; 2], [f64; 3]) = ([0.010, 0.015], [0.002, 0.004, 0.006]);
 /// Validation radius and depth pairs, metres; point `i` takes pairs `i` and `i + 3` (mod 6).
 const VALIDATION: [(f64, f64); 6] =
     [(0.015, 0.003), (0.0125, 0.005), (0.010, 0.0025), (0.015, 0.0055), (0.0125, 0.002), (0.010, 0.0045)];
 
+/// `u` in lattice units of the 8^3 grid, metres (the faces exactly).
+fn lattice(u: f64) -> f64 {
+    if u == 7.0 { CUBE_SIDE_M } else { u * (CUBE_SIDE_M / 7.0) }
+}
+
 /// The scored presses.
 pub fn press_cases() -> Vec<PressCase> {
-    let h8 = CUBE_SIDE_M / 7.0;
     let mut out = Vec::new();
     let mut validation = 0;
-    for (set, what, uv) in POINTS {
-        let at = [uv[0] * h8, uv[1] * h8, CUBE_SIDE_M];
+    let top = POINTS.iter().map(|&(set, what, uv)| (set, what, [uv[0], uv[1], 7.0], None, true));
+    let elsewhere = ELSEWHERE.iter().map(|&(set, what, at, dir)| (set, what, at, dir, false));
+    for (set, what, at, dir, on_top) in top.chain(elsewhere) {
         let pairs: Vec<(f64, f64)> = match set {
             Set::Training => TRAINING.0.iter().flat_map(|&r| TRAINING.1.iter().map(move |&d| (r, d))).collect(),
             Set::Validation => {
@@ -55,11 +94,16 @@ pub fn press_cases() -> Vec<PressCase> {
                 vec![VALIDATION[i % 6], VALIDATION[(i + 3) % 6]]
             }
         };
+        let direction = dir.map(|d: [f64; 3]| {
+            let n = d.iter().map(|c| c * c).sum::<f64>().sqrt();
+            d.map(|c| c / n)
+        });
+        let point = if on_top { format!("{}_{}", at[0], at[1]) } else { format!("{}_{}_{}", at[0], at[1], at[2]) };
         for (radius, depth) in pairs {
             out.push(PressCase {
-                id: format!("press_{what}_{}_{}_r{}_d{}", uv[0], uv[1], radius * 1e3, depth * 1e3),
+                id: format!("press_{what}_{point}_r{}_d{}", radius * 1e3, depth * 1e3),
                 set,
-                press: Press { at, radius, depth },
+                press: Press { at: at.map(lattice), radius, depth, direction },
             });
         }
     }
@@ -73,7 +117,7 @@ mod tests {
     #[test]
     fn presses_are_valid_and_the_sets_share_no_point() {
         let cases = press_cases();
-        assert_eq!(cases.len(), 4 * 6 + 6 * 2);
+        assert_eq!(cases.len(), (4 + 4) * 6 + (6 + 11) * 2);
         for c in &cases {
             c.press.check().unwrap();
             assert!((0.002..=0.006).contains(&c.press.depth) && (0.010..=0.015).contains(&c.press.radius));

@@ -151,14 +151,14 @@ pub fn worst_validation_error(
     Ok(worst)
 }
 
-/// The training presses with the material's force on each (the magnitude, newtons), from the
-/// shipped answers or the cache folder (computed and kept there where missing: minutes, each
+/// The training presses on the top face (the calibrations') with the material's force on each
+/// (the magnitude, newtons), from the shipped answers or the cache folder (computed and kept there where missing: minutes, each
 /// press said on standard error as it starts).
 pub fn training_forces(material: &Material) -> anyhow::Result<Vec<(Press, f64)>> {
     let mut cache = ContinuumCache::open(material, crate::io::cache_dir().as_deref());
     let mut out = Vec::new();
     let all = press_cases();
-    let cases: Vec<&PressCase> = all.iter().filter(|c| c.set == Set::Training).collect();
+    let cases: Vec<&PressCase> = all.iter().filter(|c| c.set == Set::Training && c.on_top_face()).collect();
     let tolerance = crate::validate::continuum::DEFAULT_TOLERANCE;
     for (i, case) in cases.iter().enumerate() {
         if cache.get(&case.press, tolerance).is_none() {

@@ -26,8 +26,9 @@ pub const FILE_MAGIC: [u8; 8] = *b"TSIMSCMP";
 /// The version of the file's layout (1 was the bare `divisions` header before the key and the
 /// checksum).
 pub const FILE_FORMAT: u32 = 2;
-/// The version of the computation: a change of method makes old files refused.
-pub const METHOD_VERSION: u32 = 1;
+/// The version of the computation: a change of method makes old files refused (1 held the top
+/// face only).
+pub const METHOD_VERSION: u32 = 2;
 /// Bytes of the header in front of the columns.
 const HEADER_BYTES: usize = 320;
 /// The checksum covers the bytes from here to the end (the key and the columns).
@@ -94,7 +95,7 @@ impl SurfaceCompliance {
         out.extend_from_slice(&FILE_FORMAT.to_le_bytes());
         out.extend_from_slice(&[0; 4]);
         out.extend_from_slice(&METHOD_VERSION.to_le_bytes());
-        out.extend_from_slice(&(self.divisions as u32).to_le_bytes());
+        out.extend_from_slice(&(self.lattice.divisions as u32).to_le_bytes());
         for c in stiffness_rows(material) {
             out.extend_from_slice(&c.to_le_bytes());
         }
@@ -142,8 +143,11 @@ impl SurfaceCompliance {
         if !same {
             return Err(FileError::Material);
         }
-        let (side, half) = (divisions + 1, divisions / 2 + 1);
-        if !divisions.is_multiple_of(2) || divisions < 2 || count != (half * half * 9 * side * side) as u64 {
+        if !divisions.is_multiple_of(2) || divisions < 2 {
+            return Err(FileError::Inconsistent);
+        }
+        let lattice = super::lattice::Lattice::new(divisions);
+        if count != lattice.values as u64 {
             return Err(FileError::Inconsistent);
         }
         let columns: Vec<f32> =
@@ -151,7 +155,7 @@ impl SurfaceCompliance {
         if columns.iter().any(|v| !v.is_finite()) {
             return Err(FileError::NotFinite);
         }
-        Ok(Self { divisions, columns })
+        Ok(Self { lattice, columns })
     }
 }
 
@@ -161,9 +165,9 @@ mod tests {
 
     /// A compliance of two divisions with made-up values (the file does not care).
     fn small() -> SurfaceCompliance {
-        let (side, half) = (3, 2);
-        let columns = (0..half * half * 9 * side * side).map(|i| 1e-6 * i as f32).collect();
-        SurfaceCompliance { divisions: 2, columns }
+        let lattice = super::super::lattice::Lattice::new(2);
+        let columns = (0..lattice.values).map(|i| 1e-6 * i as f32).collect();
+        SurfaceCompliance { lattice, columns }
     }
 
     /// `bytes` with the checksum made to match again (a file written so).
