@@ -187,6 +187,23 @@ impl SurfaceCompliance {
         radius: f64,
         scratch: &mut ContactScratch,
     ) -> Result<[f64; 3], ComplianceError> {
+        self.press_coupled(centre, radius, [0.0; 3], &[[0.0; 3]; 3], scratch)
+    }
+
+    /// [`SurfaceCompliance::press`] with every contact node also moving by `shift - G F` under
+    /// the net force `F` of the contact on the tissue (`coupling` is `G`, metres per newton: the
+    /// response of the material's slow modes folded into the contact,
+    /// [`super::modal_lag::ModalLag::response_after`]), so that one solve is exact for the
+    /// contact and the modes together. Like the contact, the shift is linear: it moves each node
+    /// along its normal.
+    pub fn press_coupled(
+        &self,
+        centre: [f64; 3],
+        radius: f64,
+        shift: [f64; 3],
+        coupling: &[[f64; 3]; 3],
+        scratch: &mut ContactScratch,
+    ) -> Result<[f64; 3], ComplianceError> {
         let ContactScratch { contact: c, nodes, points, sources, previous } = scratch;
         c.candidates.clear();
         c.active.clear();
@@ -210,7 +227,8 @@ impl SurfaceCompliance {
             nodes.push(index);
             points.push(q);
             sources.push(self.lattice.source(q));
-            c.candidates.push(contact::sphere_gap(centre, radius, x, outward(q, d)));
+            let (n, depth) = contact::sphere_gap(centre, radius, x, outward(q, d));
+            c.candidates.push((n, depth - (n[0] * shift[0] + n[1] * shift[1] + n[2] * shift[2])));
             true
         });
         if too_large {
@@ -221,7 +239,8 @@ impl SurfaceCompliance {
                 c.active.push(w);
             }
         }
-        let solved = contact::solve(&mut SurfaceNodes { compliance: self, points, sources }, c, 1e-9 * radius);
+        let mut body = SurfaceNodes { compliance: self, points, sources, coupling };
+        let solved = contact::solve(&mut body, c, 1e-9 * radius);
         previous.clear();
         solved?;
         previous.extend(c.active.iter().map(|&w| nodes[w]));
@@ -280,21 +299,27 @@ struct SurfaceNodes<'a> {
     points: &'a [[usize; 3]],
     /// How each candidate's column is found.
     sources: &'a [Source],
+    /// The slow modes' response to the contact's net force, subtracted (metres per newton).
+    coupling: &'a [[f64; 3]; 3],
 }
 
 impl contact::Compliance for SurfaceNodes<'_> {
     #[inline(always)]
     fn normal(&self, i: usize, n_i: [f64; 3], j: usize, n_j: [f64; 3]) -> f64 {
         let c = self.compliance;
+        let g = self.coupling;
+        let modes: f64 = (0..3).map(|a| n_i[a] * (g[a][0] * n_j[0] + g[a][1] * n_j[1] + g[a][2] * n_j[2])).sum();
         let by_j = c.along(&self.sources[j], n_j, self.points[i], n_i);
-        if i == j {
-            return by_j.unwrap_or(0.0);
-        }
-        match (by_j, c.along(&self.sources[i], n_i, self.points[j], n_j)) {
-            (Some(a), Some(b)) => 0.5 * (a + b),
-            (Some(a), None) | (None, Some(a)) => a,
-            (None, None) => 0.0,
-        }
+        let w = if i == j {
+            by_j.unwrap_or(0.0)
+        } else {
+            match (by_j, c.along(&self.sources[i], n_i, self.points[j], n_j)) {
+                (Some(a), Some(b)) => 0.5 * (a + b),
+                (Some(a), None) | (None, Some(a)) => a,
+                (None, None) => 0.0,
+            }
+        };
+        w - modes
     }
 }
 

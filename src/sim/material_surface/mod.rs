@@ -10,10 +10,12 @@
 //!
 //! With the material's lowest modes ([`ModalLag`]) the force is dynamic: the sphere meets the
 //! surface where the static answer puts it plus the lag of the slow modes behind their static
-//! values at the end of the span the force is held over, with that force held (the step's modal
-//! response folded into the contact, so that the contact and the modes agree and a held press is
-//! steady), found by a relaxed fixed point (at most [`MAX_LAG_ITERATIONS`] presses, from the last
-//! solve's lag); the modes are then advanced exactly over the span under the contact's forces.
+//! values at the end of the span the force is held over, with that force held. The lag is affine
+//! in the contact's net force (`free - G F`, [`ModalLag::response_after`]), so the step's modal
+//! response is folded into the contact's compliance and one contact solve per step is exact for
+//! the contact and the modes together (no iteration); the modes are then advanced exactly over
+//! the span under that force, applied where the lag is read, so that they exchange no energy with
+//! the contact that is not there and a held press is steady.
 
 pub mod compliance;
 pub mod modal_lag;
@@ -28,11 +30,6 @@ use crate::mechanics::material::Material;
 use compliance::{ComplianceError, ContactScratch, DEFAULT_DIVISIONS, MAX_CONTACT_NODES, SurfaceCompliance};
 use modal_lag::{ModalBasis, ModalLag};
 
-/// Presses per step at most while finding the lag's fixed point.
-pub const MAX_LAG_ITERATIONS: usize = 6;
-/// The fixed point is reached when the lag moves by less than this, metres.
-const LAG_TOLERANCE_M: f64 = 1e-6;
-
 /// Largest compliance file read back, bytes.
 const MAX_FILE_BYTES: u64 = crate::io::MAX_OUTPUT_BYTES as u64;
 
@@ -46,10 +43,6 @@ pub struct SurfaceProbe {
     force: [f64; 3],
     loads: Vec<(usize, [f64; 3])>,
     lag: Option<ModalLag>,
-    /// The lag found at the last update, metres.
-    delta: [f64; 3],
-    /// The fixed point's relaxation, carried from step to step.
-    relaxation: f64,
     /// Simulated time since the contact was last solved, s.
     since_solve_s: f64,
     /// The span the last solve's force is held over, s.
@@ -67,8 +60,6 @@ impl SurfaceProbe {
             force: [0.0; 3],
             loads: Vec::with_capacity(8 * MAX_CONTACT_NODES),
             lag: None,
-            delta: [0.0; 3],
-            relaxation: 0.5,
             since_solve_s: 0.0,
             span: 0.0,
         }
@@ -116,7 +107,6 @@ impl SurfaceProbe {
     /// Back to rest (the modes too).
     pub fn reset(&mut self) {
         self.release();
-        self.delta = [0.0; 3];
         if let Some(lag) = &mut self.lag {
             lag.reset();
         }
@@ -127,66 +117,51 @@ impl SurfaceProbe {
     /// lag, the contact is solved against the lag the material's modes reach at the end of the
     /// span its force is held over (the step `dt` while the sphere moves; a tick,
     /// [`super::TICK_S`], the rate a haptic device reads the force, while it is held still), with
-    /// that force held ([`ModalLag::lag_after`]): the contact and the modes agree, so they
-    /// exchange no energy that is not there and a held press is steady. Allocates nothing.
+    /// that force held, in one solve ([`ModalLag::response_after`] folded into the contact): the
+    /// contact and the modes agree, so they exchange no energy that is not there and a held press
+    /// is steady. Allocates nothing.
     pub fn update(&mut self, centre: [f64; 3], radius: f64, dt: f64) -> Result<[f64; 3], ComplianceError> {
         if self.lag.is_none() {
             if self.last == Some((centre, radius)) {
                 return Ok(self.force);
             }
             self.last = None;
-            self.press(centre, radius)?;
+            self.press(centre, radius, [0.0; 3], &[[0.0; 3]; 3])?;
             self.last = Some((centre, radius));
             return Ok(self.force);
         }
-        // The lag `d` solves `d = g(d)`, `g` the modes' lag at the span's end under the contact
-        // of the sphere moved by `-d`; Aitken-relaxed fixed point (Irons and Tuck) from the last
-        // solve's `d`.
-        // Where the lag is read: the surface point nearest the sphere's centre.
-        let point = centre.map(|c| c.clamp(0.0, CUBE_SIDE_M));
-        let mut d = self.delta;
         let still = self.last == Some((centre, radius));
         if still && self.since_solve_s < self.span * (1.0 - 1e-9) {
             return Ok(self.force);
         }
         let span = if still { super::TICK_S.max(dt) } else { dt };
         self.last = None;
-        let mut previous: Option<[f64; 3]> = None;
-        for _ in 0..MAX_LAG_ITERATIONS {
-            self.press(std::array::from_fn(|c| centre[c] - d[c]), radius)?;
-            let Some(lag) = self.lag.as_mut() else { break };
-            let (scratch, compliance) = (&self.scratch, &self.compliance);
-            lag.set_contact(
-                scratch.contacts().map(|(q, normal, lambda)| (compliance.position(q), normal.map(|c| c * lambda))),
-            );
-            let g = lag.lag_after(point, span);
-            let r: [f64; 3] = std::array::from_fn(|c| g[c] - d[c]);
-            if r.iter().all(|v| v.abs() < LAG_TOLERANCE_M) {
-                break;
-            }
-            if let Some(p) = previous {
-                let dr: [f64; 3] = std::array::from_fn(|c| r[c] - p[c]);
-                let den: f64 = dr.iter().map(|v| v * v).sum();
-                if den > 0.0 {
-                    let num: f64 = (0..3).map(|c| p[c] * dr[c]).sum();
-                    self.relaxation = (-self.relaxation * num / den).clamp(0.05, 1.0);
-                }
-            }
-            for c in 0..3 {
-                d[c] += self.relaxation * r[c];
-            }
-            previous = Some(r);
+        // The modes' response over the span, read at the surface point nearest the sphere's
+        // centre and driven there by the contact's net force: the surface moves by `free - G F`.
+        let point = centre.map(|c| c.clamp(0.0, CUBE_SIDE_M));
+        let (free, coupling) = self.lag.as_ref().map_or(([0.0; 3], [[0.0; 3]; 3]), |l| l.response_after(point, span));
+        self.press(centre, radius, free, &coupling)?;
+        let net =
+            self.scratch.contacts().fold([0.0; 3], |f, (_, n, lambda)| std::array::from_fn(|c| f[c] + n[c] * lambda));
+        if let Some(lag) = self.lag.as_mut() {
+            lag.set_contact(std::iter::once((point, net)));
         }
-        self.delta = d;
         self.last = Some((centre, radius));
         self.since_solve_s = 0.0;
         self.span = span;
         Ok(self.force)
     }
 
-    /// One press at `centre` on the compliance: the force and the model's loads.
-    fn press(&mut self, centre: [f64; 3], radius: f64) -> Result<(), ComplianceError> {
-        self.force = self.compliance.press(centre, radius, &mut self.scratch)?;
+    /// One press at `centre` on the compliance, the surface moved by the modes' `shift - coupling
+    /// F` (the modes folded in): the force and the model's loads.
+    fn press(
+        &mut self,
+        centre: [f64; 3],
+        radius: f64,
+        shift: [f64; 3],
+        coupling: &[[f64; 3]; 3],
+    ) -> Result<(), ComplianceError> {
+        self.force = self.compliance.press_coupled(centre, radius, shift, coupling, &mut self.scratch)?;
         self.loads.clear();
         for (q, normal, lambda) in self.scratch.contacts() {
             let f = normal.map(|c| c * lambda);

@@ -197,6 +197,39 @@ impl ModalLag {
         out
     }
 
+    /// The modes' response at the point `x` at the end of `span` seconds to a force `F` on the
+    /// tissue at `x`, held over the span: the lag `free - G F` as `(free, G)`. `free` is the lag
+    /// with no force (the motion the modes carry), `G = sum_k g_k phi_k(x) phi_k(x)^T` with
+    /// `g_k` each mode's exact step response (its static compliance `1 / omega_k^2` at
+    /// `span = 0`); metres and metres per newton. The contact folds `-G` into its compliance, so
+    /// that one contact solve gives the force the modes then reach ([`ModalLag::advance`] under
+    /// that force at `x`): collocated, the contact and the modes exchange no energy that is not
+    /// there. Allocates nothing.
+    pub fn response_after(&self, x: [f64; 3], span: f64) -> ([f64; 3], [[f64; 3]; 3]) {
+        let corners = self.basis.corners(x);
+        let (mut free, mut g) = ([0.0; 3], [[0.0; 3]; 3]);
+        let a = self.half_alpha;
+        for (k, shape) in self.basis.shape.iter().enumerate() {
+            let w = self.basis.omega[k];
+            let (e, c, s) = propagator(w, a, span);
+            let mut phi = [0.0; 3];
+            for &(t, wt) in &corners {
+                for (d, p) in phi.iter_mut().enumerate() {
+                    *p += wt * shape[3 * t + d];
+                }
+            }
+            let moving = e * (self.q[k] * c + (self.qdot[k] + a * self.q[k]) * s);
+            let gk = e * (c + a * s) / (w * w);
+            for i in 0..3 {
+                free[i] += phi[i] * moving;
+                for j in 0..3 {
+                    g[i][j] += gk * phi[i] * phi[j];
+                }
+            }
+        }
+        (free, g)
+    }
+
     /// Advances every coordinate by `dt` under the modal forces set (held over the step),
     /// exactly (under- or overdamped).
     pub fn advance(&mut self, dt: f64) {
