@@ -14,8 +14,8 @@
 //! in the contact's net force (`free - G F`, [`ModalLag::response_after`]), so the step's modal
 //! response is folded into the contact's compliance and one contact solve per step is exact for
 //! the contact and the modes together (no iteration); the modes are then advanced exactly over
-//! the span under that force, applied where the lag is read, so that they exchange no energy with
-//! the contact that is not there and a held press is steady.
+//! the span under that force, spread over the patch the lag is read on, so that they exchange no
+//! energy with the contact that is not there and a held press is steady.
 
 pub mod compliance;
 pub mod modal_lag;
@@ -136,15 +136,26 @@ impl SurfaceProbe {
         }
         let span = if still { super::TICK_S.max(dt) } else { dt };
         self.last = None;
-        // The modes' response over the span, read at the surface point nearest the sphere's
-        // centre and driven there by the contact's net force: the surface moves by `free - G F`.
-        let point = centre.map(|c| c.clamp(0.0, CUBE_SIDE_M));
-        let (free, coupling) = self.lag.as_ref().map_or(([0.0; 3], [[0.0; 3]; 3]), |l| l.response_after(point, span));
+        // The modes' response over the span, read over the patch the contact's net force is
+        // spread on (the last contact's, weighted by its forces; before one, the surface point
+        // nearest the sphere's centre): the surface moves by `free - G F` there.
+        let (free, coupling) = match self.lag.as_mut() {
+            Some(lag) => {
+                let (scratch, compliance) = (&self.scratch, &self.compliance);
+                if scratch.contacts().any(|(_, _, l)| l > 0.0) {
+                    lag.set_patch(scratch.contacts().map(|(q, _, l)| (compliance.position(q), l)));
+                } else {
+                    lag.set_patch(std::iter::once((centre.map(|c| c.clamp(0.0, CUBE_SIDE_M)), 1.0)));
+                }
+                lag.response_after(span)
+            }
+            None => ([0.0; 3], [[0.0; 3]; 3]),
+        };
         self.press(centre, radius, free, &coupling)?;
         let net =
             self.scratch.contacts().fold([0.0; 3], |f, (_, n, lambda)| std::array::from_fn(|c| f[c] + n[c] * lambda));
         if let Some(lag) = self.lag.as_mut() {
-            lag.set_contact(std::iter::once((point, net)));
+            lag.hold(net);
         }
         self.last = Some((centre, radius));
         self.since_solve_s = 0.0;

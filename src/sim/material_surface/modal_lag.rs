@@ -107,6 +107,9 @@ pub struct ModalLag {
     /// The contact's forces gathered on the basis's nodes, N.
     node_force: Vec<[f64; 3]>,
     touched: Vec<usize>,
+    /// Where the contact's net force acts and the lag is read: grid nodes and weights (summing to
+    /// 1).
+    patch: Vec<(usize, f64)>,
 }
 
 impl ModalLag {
@@ -122,6 +125,7 @@ impl ModalLag {
             force: vec![0.0; k],
             node_force: vec![[0.0; 3]; nodes],
             touched: Vec::with_capacity(nodes),
+            patch: Vec::with_capacity(nodes),
         }
     }
 
@@ -197,27 +201,58 @@ impl ModalLag {
         out
     }
 
-    /// The modes' response at the point `x` at the end of `span` seconds to a force `F` on the
-    /// tissue at `x`, held over the span: the lag `free - G F` as `(free, G)`. `free` is the lag
-    /// with no force (the motion the modes carry), `G = sum_k g_k phi_k(x) phi_k(x)^T` with
-    /// `g_k` each mode's exact step response (its static compliance `1 / omega_k^2` at
-    /// `span = 0`); metres and metres per newton. The contact folds `-G` into its compliance, so
-    /// that one contact solve gives the force the modes then reach ([`ModalLag::advance`] under
-    /// that force at `x`): collocated, the contact and the modes exchange no energy that is not
-    /// there. Allocates nothing.
-    pub fn response_after(&self, x: [f64; 3], span: f64) -> ([f64; 3], [[f64; 3]; 3]) {
-        let corners = self.basis.corners(x);
-        let (mut free, mut g) = ([0.0; 3], [[0.0; 3]; 3]);
-        let a = self.half_alpha;
-        for (k, shape) in self.basis.shape.iter().enumerate() {
-            let w = self.basis.omega[k];
-            let (e, c, s) = propagator(w, a, span);
-            let mut phi = [0.0; 3];
-            for &(t, wt) in &corners {
-                for (d, p) in phi.iter_mut().enumerate() {
-                    *p += wt * shape[3 * t + d];
+    /// Sets the patch the contact acts on: surface points and their weights (the last contact's
+    /// nodes and forces; the point under the sphere before a contact). Allocates nothing.
+    pub fn set_patch(&mut self, points: impl Iterator<Item = ([f64; 3], f64)>) {
+        self.patch.clear();
+        let mut total = 0.0;
+        for (x, w) in points {
+            if w <= 0.0 {
+                continue;
+            }
+            total += w;
+            for (t, c) in self.basis.corners(x) {
+                if c == 0.0 {
+                    continue;
+                }
+                match self.patch.iter_mut().find(|(n, _)| *n == t) {
+                    Some(p) => p.1 += w * c,
+                    None => self.patch.push((t, w * c)),
                 }
             }
+        }
+        for p in &mut self.patch {
+            p.1 /= total;
+        }
+    }
+
+    /// Mode `k`'s shape averaged over the patch.
+    fn patch_shape(&self, k: usize) -> [f64; 3] {
+        let shape = &self.basis.shape[k];
+        let mut phi = [0.0; 3];
+        for &(t, w) in &self.patch {
+            for (d, p) in phi.iter_mut().enumerate() {
+                *p += w * shape[3 * t + d];
+            }
+        }
+        phi
+    }
+
+    /// The modes' response over the patch at the end of `span` seconds to a net force `F` on the
+    /// tissue spread over the patch, held over the span: the lag `free - G F` as `(free, G)`.
+    /// `free` is the lag with no force (the motion the modes carry), `G = sum_k g_k phi_k
+    /// phi_k^T` with `phi_k` the mode's shape over the patch and `g_k` its exact step response
+    /// (its static compliance `1 / omega_k^2` at `span = 0`); metres and metres per newton. The
+    /// contact folds `-G` into its compliance, so that one contact solve gives the force the
+    /// modes then reach ([`ModalLag::hold`] and [`ModalLag::advance`]): collocated, the contact
+    /// and the modes exchange no energy that is not there. Allocates nothing.
+    pub fn response_after(&self, span: f64) -> ([f64; 3], [[f64; 3]; 3]) {
+        let (mut free, mut g) = ([0.0; 3], [[0.0; 3]; 3]);
+        let a = self.half_alpha;
+        for k in 0..self.basis.omega.len() {
+            let w = self.basis.omega[k];
+            let (e, c, s) = propagator(w, a, span);
+            let phi = self.patch_shape(k);
             let moving = e * (self.q[k] * c + (self.qdot[k] + a * self.q[k]) * s);
             let gk = e * (c + a * s) / (w * w);
             for i in 0..3 {
@@ -228,6 +263,14 @@ impl ModalLag {
             }
         }
         (free, g)
+    }
+
+    /// Holds the net force `net` (newtons, on the tissue) spread over the patch, from now on.
+    pub fn hold(&mut self, net: [f64; 3]) {
+        for k in 0..self.force.len() {
+            let phi = self.patch_shape(k);
+            self.force[k] = phi[0] * net[0] + phi[1] * net[1] + phi[2] * net[2];
+        }
     }
 
     /// Advances every coordinate by `dt` under the modal forces set (held over the step),
