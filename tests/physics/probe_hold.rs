@@ -5,7 +5,7 @@
 //! the held force swung between 0 and 2.2 to 3.5 times its settled value.
 
 use tissue_sim::mechanics::material::Material;
-use tissue_sim::sim::material_surface::compliance::ContactScratch;
+use tissue_sim::sim::material_surface::compliance::{ContactScratch, SurfaceCompliance};
 use tissue_sim::sim::material_surface::load_or_compute;
 use tissue_sim::study::script::{Script, run};
 
@@ -60,6 +60,20 @@ fn a_held_press_is_steady_and_settles_to_the_materials_static_force() {
     }
 }
 
+/// The material's static force on the sphere along `direction`, pressed `depth` at `at`.
+fn static_force(
+    compliance: &SurfaceCompliance,
+    scratch: &mut ContactScratch,
+    at: [f64; 3],
+    direction: [f64; 3],
+    radius: f64,
+    depth: f64,
+) -> f64 {
+    let centre = tissue_sim::sim::press::centre(at, glam::DVec3::from(direction), radius, depth);
+    let f = compliance.press(centre, radius, scratch).expect("a press");
+    -(0..3).map(|c| f[c] * direction[c]).sum::<f64>()
+}
+
 /// On every free face, across an edge and into a corner (the material's surface compliance
 /// covers the whole free surface): a press held is steady, with and without damping, and settles
 /// to the material's static force there.
@@ -83,9 +97,7 @@ fn a_press_held_on_every_face_an_edge_or_a_corner_is_steady() {
     for ((at, direction), (radius, depth)) in
         presses.into_iter().flat_map(|p| [(p, (0.015, 0.004)), (p, (0.01, 0.006))])
     {
-        let centre = tissue_sim::sim::press::centre(at, glam::DVec3::from(direction), radius, depth);
-        let f = compliance.press(centre, radius, &mut scratch).expect("a press");
-        let stat = -(0..3).map(|c| f[c] * direction[c]).sum::<f64>();
+        let stat = static_force(&compliance, &mut scratch, at, direction, radius, depth);
         for zeta in [0.0, 0.2, 1.0] {
             let f = held_along(at, direction, radius, depth, zeta, 3.0);
             let mean = f.iter().sum::<f64>() / f.len() as f64;
@@ -118,9 +130,7 @@ fn grid_held_steady(axis: usize, high: bool) {
         direction[axis] = if high { -1.0 } else { 1.0 };
         let (radius, depth) = [(0.015, 0.004), (0.01, 0.002)][p % 2];
         let zeta = [0.0, 0.2, 1.0][p % 3];
-        let centre = tissue_sim::sim::press::centre(at, glam::DVec3::from(direction), radius, depth);
-        let f = compliance.press(centre, radius, &mut scratch).expect("a press");
-        let stat = -(0..3).map(|c| f[c] * direction[c]).sum::<f64>();
+        let stat = static_force(&compliance, &mut scratch, at, direction, radius, depth);
         let f = held_along(at, direction, radius, depth, zeta, 10.0);
         let mean = f.iter().sum::<f64>() / f.len() as f64;
         let swing = f.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max) / mean;

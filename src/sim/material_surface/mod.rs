@@ -100,7 +100,7 @@ impl SurfaceProbe {
         self.force = [0.0; 3];
         self.last = None;
         if let Some(lag) = &mut self.lag {
-            lag.set_contact(std::iter::empty());
+            lag.release();
         }
     }
 

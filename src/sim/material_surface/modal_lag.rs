@@ -104,9 +104,6 @@ pub struct ModalLag {
     qdot: Vec<f64>,
     /// Modal forces of the contact now, N.
     force: Vec<f64>,
-    /// The contact's forces gathered on the basis's nodes, N.
-    node_force: Vec<[f64; 3]>,
-    touched: Vec<usize>,
     /// Where the contact's net force acts and the lag is read: grid nodes and weights (summing to
     /// 1).
     patch: Vec<(usize, f64)>,
@@ -123,8 +120,6 @@ impl ModalLag {
             q: vec![0.0; k],
             qdot: vec![0.0; k],
             force: vec![0.0; k],
-            node_force: vec![[0.0; 3]; nodes],
-            touched: Vec::with_capacity(nodes),
             patch: Vec::with_capacity(nodes),
         }
     }
@@ -138,67 +133,12 @@ impl ModalLag {
     pub fn reset(&mut self) {
         self.q.fill(0.0);
         self.qdot.fill(0.0);
-        self.set_contact(std::iter::empty());
+        self.release();
     }
 
-    /// Sets the modal forces of the contact: forces on the tissue (newtons) at surface points `x`.
-    /// Allocates nothing.
-    pub fn set_contact(&mut self, forces: impl Iterator<Item = ([f64; 3], [f64; 3])>) {
-        for &t in &self.touched {
-            self.node_force[t] = [0.0; 3];
-        }
-        self.touched.clear();
-        for (x, f) in forces {
-            for (t, w) in self.basis.corners(x) {
-                if w == 0.0 {
-                    continue;
-                }
-                if self.node_force[t] == [0.0; 3] && !self.touched.contains(&t) {
-                    self.touched.push(t);
-                }
-                for c in 0..3 {
-                    self.node_force[t][c] += w * f[c];
-                }
-            }
-        }
-        for (fk, shape) in self.force.iter_mut().zip(&self.basis.shape) {
-            *fk = self
-                .touched
-                .iter()
-                .map(|&t| (0..3).map(|c| shape[3 * t + c] * self.node_force[t][c]).sum::<f64>())
-                .sum();
-        }
-    }
-
-    /// The lag of the surface at the point `x` behind its static answer under the contact set,
-    /// metres.
-    pub fn lag(&self, x: [f64; 3]) -> [f64; 3] {
-        self.lag_after(x, 0.0)
-    }
-
-    /// The lag of the surface at the point `x` behind its static answer at the end
-    /// of `span` seconds with the contact's modal forces held meanwhile, metres: each mode's
-    /// exact motion over the span ([`ModalLag::advance`]), so that a contact solved with it is
-    /// consistent with the state the modes reach (the step's modal response folded into the
-    /// contact: no energy exchanged that is not there). `span = 0` is [`ModalLag::lag`].
-    pub fn lag_after(&self, x: [f64; 3], span: f64) -> [f64; 3] {
-        let corners = self.basis.corners(x);
-        let mut out = [0.0; 3];
-        for (k, shape) in self.basis.shape.iter().enumerate() {
-            let w = self.basis.omega[k];
-            let a = self.half_alpha;
-            let (e, c, s) = propagator(w, a, span);
-            // q(span) - F / w^2 from (q, q'), the force held: the free motion, less the static
-            // answer's part the mode has not reached.
-            let free = e * (self.q[k] * c + (self.qdot[k] + a * self.q[k]) * s);
-            let behind = free - e * (c + a * s) * self.force[k] / (w * w);
-            for &(t, wt) in &corners {
-                for c in 0..3 {
-                    out[c] += wt * shape[3 * t + c] * behind;
-                }
-            }
-        }
-        out
+    /// No contact: no modal forces from now on.
+    pub fn release(&mut self) {
+        self.force.fill(0.0);
     }
 
     /// Sets the patch the contact acts on: surface points and their weights (the last contact's
@@ -320,10 +260,17 @@ mod tests {
         assert!((14.0..16.0).contains(&lo) && hi > lo, "{lo} {hi}");
         let mut lag = ModalLag::new(basis, 0.2);
         let x = [0.05, 0.05, 0.1];
-        lag.set_contact([(x, [0.0, 0.0, -1.0])].into_iter());
+        let net = [0.0, 0.0, -1.0];
+        lag.set_patch([(x, 1.0)].into_iter());
+        lag.hold(net);
+        // The lag over the patch: `free - G F` with the force held.
+        let behind = |l: &ModalLag| {
+            let (free, g) = l.response_after(0.0);
+            free[2] - (0..3).map(|j| g[2][j] * net[j]).sum::<f64>()
+        };
         // At once the surface lags by the whole static answer of the modes: it is higher.
-        let first = lag.lag(x);
-        assert!(first[2] > 0.0, "{first:?}");
+        let first = behind(&lag);
+        assert!(first > 0.0, "{first}");
         // Stepped in 1 ms steps or 0.1 ms steps: the same motion at the same times.
         let mut fine = lag.clone();
         for _ in 0..20 {
@@ -332,12 +279,20 @@ mod tests {
                 fine.advance(1e-4);
             }
         }
-        let (a, b) = (lag.lag(x), fine.lag(x));
-        assert!((a[2] - b[2]).abs() < 1e-9 * first[2].abs(), "{a:?} {b:?}");
+        let (a, b) = (behind(&lag), behind(&fine));
+        assert!((a - b).abs() < 1e-9 * first.abs(), "{a} {b}");
+        // Read 5 ms ahead, the exact step agrees with stepping there.
+        let ahead = {
+            let (free, g) = lag.response_after(5e-3);
+            free[2] - (0..3).map(|j| g[2][j] * net[j]).sum::<f64>()
+        };
+        let mut stepped = lag.clone();
+        stepped.advance(5e-3);
+        assert!((ahead - behind(&stepped)).abs() < 1e-9 * first.abs(), "{ahead}");
         for _ in 0..2000 {
             lag.advance(1e-3);
         }
-        let settled = lag.lag(x);
-        assert!(settled[2].abs() < 1e-6 * first[2], "{settled:?}");
+        let settled = behind(&lag);
+        assert!(settled.abs() < 1e-6 * first, "{settled}");
     }
 }

@@ -148,24 +148,10 @@ fn sample_points() -> Vec<[f64; 3]> {
 
 /// Trilinear interpolation of nodal displacements `u` on `grid` at point `p`.
 pub fn sample(grid: &Grid, u: &[[f64; 3]], p: [f64; 3]) -> [f64; 3] {
-    let n = grid.n();
-    let h = grid.h();
-    let mut cell = [0usize; 3];
-    let mut t = [0.0; 3];
-    for a in 0..3 {
-        let s = (p[a] / h).clamp(0.0, (n - 1) as f64);
-        cell[a] = (s.floor() as usize).min(n - 2);
-        t[a] = s - cell[a] as f64;
-    }
     let mut out = [0.0; 3];
-    for corner in 0..8 {
-        let o = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
-        let w: f64 = (0..3).map(|a| if o[a] == 1 { t[a] } else { 1.0 - t[a] }).product();
-        if w != 0.0 {
-            let q = grid.node(cell[0] + o[0], cell[1] + o[1], cell[2] + o[2]);
-            for c in 0..3 {
-                out[c] += w * u[q][c];
-            }
+    for (q, w) in grid.corners(p) {
+        for c in 0..3 {
+            out[c] += w * u[q][c];
         }
     }
     out
