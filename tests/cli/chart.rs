@@ -25,10 +25,9 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     assert!(points.iter().all(|p| (p.cost_per_sim_s / (p.step_s / p.dt_s) - 1.0).abs() < 1e-12));
     assert!(points.iter().any(|p| p.pareto_dynamic), "a dynamic Pareto front is marked");
     // The probe against the material at every resolution: the model's own node contact, and the
-    // material's surface compliance (measured worst 9.9 %, a corner pressed 2 mm, which the 2 mm
-    // lattice resolves coarsely; 2.2 % but for edges and corners pressed at most 2.5 mm).
+    // material's surface compliance (measured worst 2.7 %, A's held-out presses).
     assert!(header.contains("probe_err_pct") && header.contains("surface_probe_err_pct"), "{header}");
-    assert!(points.iter().all(|p| p.probe_err_pct.is_finite() && p.surface_probe_err_pct < 11.0), "{csv}");
+    assert!(points.iter().all(|p| p.probe_err_pct.is_finite() && p.surface_probe_err_pct < 7.0), "{csv}");
     assert!(std::fs::read_to_string(out.join("chart_dynamic.svg")).expect("svg").contains("<svg"));
     let md = std::fs::read_to_string(out.join("chart.md")).expect("md");
     assert!(md.contains("Where the dynamic error crosses 5 %"), "{md}");
@@ -38,24 +37,13 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     let chart_s = chart.to_str().expect("utf8");
     // A rate every model meets on any machine: the round trip is tested here, not the speed (that
     // is `bench`'s; with other tests running beside it a 1 ms tick is not assured).
-    let o = run(&["choose", "--chart", chart_s, "--max-error", "5", "--rate", "100", "--max-probe-error", "11"]);
+    let o = run(&["choose", "--chart", chart_s, "--max-error", "5", "--rate", "100"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("Chosen:") && text.contains("probe force error"), "{text}");
     // Dynamic budgets beside the static one.
-    let o = run(&[
-        "choose",
-        "--chart",
-        chart_s,
-        "--max-period-error",
-        "2",
-        "--max-damping-error",
-        "1",
-        "--rate",
-        "100",
-        "--max-probe-error",
-        "11",
-    ]);
+    let o =
+        run(&["choose", "--chart", chart_s, "--max-period-error", "2", "--max-damping-error", "1", "--rate", "100"]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("period error <= 2 %") && text.contains("damping ratio error <= 1 % of critical"), "{text}");
     let o = run(&["choose", "--chart", chart_s, "--max-damping-error", "0"]);

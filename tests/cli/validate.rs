@@ -31,15 +31,13 @@ fn validate_prints_the_touch_benchmark_contract() {
     let material = &v["material"];
     assert_eq!(material["contact"], "surface");
     assert_eq!(material["cases"].as_array().expect("presses").len(), 82);
-    // Measured worst 17.7 % (B): the top/-y edge pressed 2 mm (the 2 mm lattice resolves the
-    // shallow edges and corners coarsely); every other press within 7 % (3.2 %).
-    assert!(material["worst_error"].as_f64().is_some_and(|e| e < 0.2), "{}", material["worst_error"]);
+    // Every press within 7 % (measured worst 2.7 % held out, 3.6 % in training, A; 1 mm rows
+    // across the edges, where a shallow press touches a strip a few millimetres wide).
+    assert!(material["worst_error"].as_f64().is_some_and(|e| e < 0.07), "{}", material["worst_error"]);
     for c in material["cases"].as_array().expect("presses") {
         let id = c["id"].as_str().unwrap_or("");
-        let shallow_edge = (id.starts_with("press_edge") || id.starts_with("press_corner"))
-            && c["press"]["depth"].as_f64() <= Some(0.0025);
         let error = c["error"].as_f64().unwrap_or(1.0);
-        assert!(shallow_edge || error.abs() < 0.07, "{id}: {error}");
+        assert!(error.abs() < 0.07, "{id}: {error}");
     }
     let modes = v["modes_hz"].as_array().expect("modes");
     assert_eq!(modes.len(), 6);

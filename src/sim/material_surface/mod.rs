@@ -232,7 +232,7 @@ const KEPT: &str = "the surface compliance";
 /// The report on standard error of computing a material's surface compliance, for the commands
 /// (`&mut |e| report.event(e)` as [`load_or_compute`]'s `report`).
 pub fn stderr_report() -> StderrReport {
-    StderrReport::new("the material's surface compliance", "30 s")
+    StderrReport::new("the material's surface compliance", "a minute")
 }
 
 /// `material`'s surface compliance: read from the cache folder `dir` where the file there proves

@@ -1,5 +1,5 @@
-//! Where the surface compliance lives: the nodes of a uniform lattice on the cube's free surface
-//! (the top face and the four side faces; the clamped bottom row left out), the three families of
+//! Where the surface compliance lives: the nodes of a lattice on the cube's free surface (the top
+//! face and the four side faces; the clamped bottom row left out), the three families of
 //! faces that share a fine FEM mesh (the top face; the two faces normal to x, mirror images; the
 //! two normal to y), and which columns each family keeps.
 //!
@@ -11,13 +11,49 @@
 //! node there shifts along the edge only; near a corner, not at all). A column holds the
 //! displacements of its own face and of [`BAND_ROWS`] rows of the faces beside it (a press across
 //! an edge).
+//!
+//! The lattice is uniform but for the first [`HALVED`] intervals from either end of every axis,
+//! which are halved: across every edge the rows are twice as close (1 mm at 2 mm), where a
+//! shallow press across an edge or into a corner has its whole contact. Its indices count the
+//! halved rows; [`EDGE_ROWS`], [`BAND_ROWS`] and [`STRIDE`] count the lattice's intervals.
 
-/// Rows of nodes from an edge within which every column is solved.
+use crate::mechanics::grid::CUBE_SIDE_M;
+
+/// Intervals at each end of an axis that are halved.
+pub const HALVED: usize = 2;
+/// Intervals from an edge within which every column is solved.
 pub const EDGE_ROWS: usize = 4;
 /// Away from the edges, one node's column in this many per axis is solved.
 pub const STRIDE: usize = 3;
-/// Rows of the neighbouring faces (from the shared edge) a column holds.
+/// Intervals of the neighbouring faces (from the shared edge) a column holds.
 pub const BAND_ROWS: usize = 8;
+
+/// Intervals halved at each end of an axis of `divisions` intervals (fewer on a lattice too
+/// coarse for them).
+fn halved(divisions: usize) -> usize {
+    HALVED.min((divisions / 2).saturating_sub(1))
+}
+
+/// The node coordinates along an axis of `divisions` intervals (the first and last
+/// [`HALVED`] halved), metres, ascending from 0 to the side.
+pub fn coordinates(divisions: usize) -> Vec<f64> {
+    let (d, h) = (divisions, halved(divisions));
+    let s = CUBE_SIDE_M / d as f64;
+    let n = d + 2 * h;
+    (0..=n)
+        .map(|i| {
+            if i == n {
+                CUBE_SIDE_M
+            } else if i <= 2 * h {
+                0.5 * s * i as f64
+            } else if i + 2 * h >= n {
+                CUBE_SIDE_M - 0.5 * s * (n - i) as f64
+            } else {
+                s * (i - h) as f64
+            }
+        })
+        .collect()
+}
 
 /// The faces of one fine mesh and the columns it keeps.
 #[derive(Debug, Clone, PartialEq)]
@@ -55,8 +91,10 @@ pub struct Source {
 /// The surface lattice of `divisions` divisions per axis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Lattice {
-    /// Divisions per axis (even).
+    /// Divisions per axis (even), before halving those at the ends.
     pub divisions: usize,
+    /// Node coordinates along every axis ([`coordinates`]), metres.
+    pub coords: Vec<f64>,
     /// The top face's family, the x faces', the y faces'.
     pub families: [Family; 3],
     /// Values held: all families' columns.
@@ -66,11 +104,14 @@ pub struct Lattice {
 impl Lattice {
     /// The lattice of `divisions` (even, at least 2) divisions per axis.
     pub fn new(divisions: usize) -> Self {
-        let d = divisions;
+        let coords = coordinates(divisions);
+        let extra = halved(divisions);
+        let d = coords.len() - 1;
         let h = d / 2;
+        let edge = EDGE_ROWS + extra;
         // The side faces' nodes: below the top face's row; those on a vertical edge are the x faces'.
-        let (mirrored, height) = (solved_along(0, h, false, d), solved_along(1, d - 1, true, d));
-        let inner = solved_along(1, h, false, d);
+        let (mirrored, height) = (solved_along(0, h, false, d, edge), solved_along(1, d - 1, true, d, edge));
+        let inner = solved_along(1, h, false, d, edge);
         let mut offset = 0;
         let families = [
             (2, [0, 1], [mirrored.clone(), mirrored.clone()]),
@@ -78,7 +119,7 @@ impl Lattice {
             (1, [0, 2], [inner, height]),
         ]
         .map(|(axis, plane, solved): (usize, [usize; 2], [Vec<usize>; 2])| {
-            let band = d.saturating_sub(BAND_ROWS);
+            let band = d.saturating_sub(BAND_ROWS + extra);
             let targets: Vec<[usize; 3]> = all_surface(d).filter(|q| q[axis] >= band && q[axis] >= 1).collect();
             let side = d + 1;
             let mut table = vec![u32::MAX; side * side * side];
@@ -90,18 +131,23 @@ impl Lattice {
             offset += f.columns() * 9 * f.targets.len();
             f
         });
-        Self { divisions, families, values: offset }
+        Self { divisions, coords, families, values: offset }
+    }
+
+    /// The last index along an axis (intervals per axis, the halved ones counted).
+    pub fn last(&self) -> usize {
+        self.coords.len() - 1
     }
 
     /// Lattice nodes per axis.
     pub fn side(&self) -> usize {
-        self.divisions + 1
+        self.coords.len()
     }
 
     /// Surface nodes: the top face, the faces x = 0 and x = L without their top and bottom rows,
     /// the faces y = 0 and y = L without those and without their vertical edges.
     pub fn len(&self) -> usize {
-        let (s, m) = (self.side(), self.divisions - 1);
+        let (s, m) = (self.side(), self.last() - 1);
         s * s + 2 * s * m + 2 * m * m
     }
 
@@ -112,7 +158,7 @@ impl Lattice {
 
     /// The surface node at lattice point `q`, if it is one.
     pub fn index(&self, q: [usize; 3]) -> Option<usize> {
-        let (d, s) = (self.divisions, self.side());
+        let (d, s) = (self.last(), self.side());
         let m = d - 1;
         let [i, j, k] = q;
         if i > d || j > d || k > d || k == 0 {
@@ -133,7 +179,7 @@ impl Lattice {
 
     /// The lattice point of surface node `q`.
     pub fn point(&self, q: usize) -> [usize; 3] {
-        let (d, s) = (self.divisions, self.side());
+        let (d, s) = (self.last(), self.side());
         let m = d - 1;
         if q < s * s {
             return [q % s, q / s, d];
@@ -150,7 +196,7 @@ impl Lattice {
 
     /// How surface node `p`'s column is found.
     pub fn source(&self, p: [usize; 3]) -> Source {
-        let (d, h) = (self.divisions, self.divisions / 2);
+        let (d, h) = (self.last(), self.last() / 2);
         let (family, flip) = if p[2] == d {
             (0, [p[0] > h, p[1] > h])
         } else if p[0] == 0 || p[0] == d {
@@ -177,7 +223,7 @@ impl Lattice {
     /// hold it.
     #[inline]
     pub fn target(&self, source: &Source, q: [usize; 3]) -> Option<usize> {
-        let d = self.divisions;
+        let d = self.last();
         let f = &self.families[source.family as usize];
         let mut m = mirror(q, source.flip, d);
         for c in 0..3 {
@@ -198,11 +244,11 @@ impl Family {
         self.solved[0].len() * self.solved[1].len()
     }
 
-    /// The lattice point of solved column `c` (on the face `axis = L`).
-    pub fn column_point(&self, c: usize, divisions: usize) -> [usize; 3] {
+    /// The lattice point of solved column `c` (on the face `axis = L`, of index `last`).
+    pub fn column_point(&self, c: usize, last: usize) -> [usize; 3] {
         let n = self.solved[0].len();
         let mut p = [0; 3];
-        p[self.axis] = divisions;
+        p[self.axis] = last;
         p[self.plane[0]] = self.solved[0][c % n];
         p[self.plane[1]] = self.solved[1][c / n];
         p
@@ -215,13 +261,11 @@ fn mirror(q: [usize; 3], flip: [bool; 2], d: usize) -> [usize; 3] {
     [if flip[0] { d - q[0] } else { q[0] }, if flip[1] { d - q[1] } else { q[1] }, q[2]]
 }
 
-/// The solved coordinates on `[lo, hi]`: every one within [`EDGE_ROWS`] of an edge (at 0, and at
-/// `d` where `far_edge`), every [`STRIDE`]th between, and `hi`.
-fn solved_along(lo: usize, hi: usize, far_edge: bool, d: usize) -> Vec<usize> {
+/// The solved indices on `[lo, hi]`: every one within `edge` of an edge (at 0, and at `d` where
+/// `far_edge`), every [`STRIDE`]th between, and `hi`.
+fn solved_along(lo: usize, hi: usize, far_edge: bool, d: usize, edge: usize) -> Vec<usize> {
     (lo..=hi)
-        .filter(|&c| {
-            c <= EDGE_ROWS || (far_edge && c + EDGE_ROWS >= d) || (c - EDGE_ROWS).is_multiple_of(STRIDE) || c == hi
-        })
+        .filter(|&c| c <= edge || (far_edge && c + edge >= d) || (c - edge).is_multiple_of(STRIDE) || c == hi)
         .collect()
 }
 
@@ -247,6 +291,9 @@ mod tests {
     fn every_surface_node_has_one_index_and_a_column_near_it() {
         for d in [2, 10, 50] {
             let l = Lattice::new(d);
+            let x = &l.coords;
+            assert!(x.windows(2).all(|w| w[1] > w[0]) && x[0] == 0.0 && x[l.last()] == CUBE_SIDE_M);
+            assert!((0..=l.last()).all(|i| (x[i] + x[l.last() - i] - CUBE_SIDE_M).abs() < 1e-15), "{x:?}");
             for q in 0..l.len() {
                 let p = l.point(q);
                 assert_eq!(l.index(p), Some(q), "{d} {p:?}");
@@ -254,14 +301,17 @@ mod tests {
                 assert!(s.shift.iter().all(|v| v.abs() <= 1), "{p:?} {s:?}");
                 assert!(l.target(&s, p).is_some(), "{d}: the node itself {p:?}");
             }
-            assert_eq!(all_surface(d).count(), l.len());
+            assert_eq!(all_surface(l.last()).count(), l.len());
         }
         let l = Lattice::new(50);
+        // 1 mm rows across the edges, 2 mm between.
+        assert_eq!(l.last(), 54);
+        assert!((l.coords[4] - 0.004).abs() < 1e-15 && (l.coords[5] - 0.006).abs() < 1e-15, "{:?}", l.coords);
         // Near a corner every column is solved, near an edge it shifts along the edge only; a
         // twentieth or so in all.
-        assert_eq!(l.source([2, 48, 50]).shift, [0, 0, 0]);
-        assert_eq!(l.source([2, 30, 50]).shift[0], 0);
-        assert_eq!(l.source([50, 30, 49]).shift[2], 0);
+        assert_eq!(l.source([2, 52, 54]).shift, [0, 0, 0]);
+        assert_eq!(l.source([2, 30, 54]).shift[0], 0);
+        assert_eq!(l.source([54, 30, 53]).shift[2], 0);
         let solved: usize = l.families.iter().map(Family::columns).sum();
         assert!(solved < l.len() / 16, "{solved}");
     }
