@@ -63,7 +63,10 @@ impl ObjectArgs {
     /// The chosen material, or `fallback` (an object label from a file) when none is given.
     pub fn material(&self, fallback: Option<&str>) -> anyhow::Result<Material> {
         if let Some(path) = &self.material {
-            return Ok(Material::from_file(path)?);
+            let material = Material::from_file(path)?;
+            // Read and checked whole (the inclusions too), then refused where not modelled yet.
+            material.require_homogeneous("the command line")?;
+            return Ok(material);
         }
         let name = self.object.as_deref().or(fallback).context("give --object A|B or --material FILE")?;
         Material::preset(&name.to_ascii_uppercase())

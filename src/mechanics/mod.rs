@@ -1,7 +1,7 @@
 //! Layer 1, the mechanics: the cube, its material, its load cases and the two models of it.
 //!
 //! - [`grid`]: nodes, elements and spring families of the cube; [`material`]: engineering
-//!   constants, `S` and `C`; [`cases`]: the benchmark's load cases and their answers;
+//!   constants, `S` and `C`; [`inclusion`]: spheres of another stiffness in it; [`cases`]: the benchmark's load cases and their answers;
 //!   [`displacement_file`]: the spec's JSON of case answers; [`object`]: the paper's objects A and
 //!   B by name.
 //! - [`sparse`]: faer's sparse Cholesky behind one SPD system type.
@@ -17,6 +17,7 @@ pub mod cases;
 pub mod displacement_file;
 pub mod fem;
 pub mod grid;
+pub mod inclusion;
 pub mod kinetic;
 pub mod material;
 pub mod msm;

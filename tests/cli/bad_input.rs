@@ -15,6 +15,10 @@ fn bad_input_fails_cleanly_without_output() {
     )
     .expect("write");
     let missing = dir.path().join("missing.toml");
+    let lump = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/lump_5x_r8.toml");
+    let outside = dir.path().join("outside.toml");
+    let background = std::fs::read_to_string(lump).expect("the shipped lump").replace("0.082]", "0.095]");
+    std::fs::write(&outside, background).expect("write");
     let nan_mat = dir.path().join("nan.json");
     std::fs::write(
         &nan_mat,
@@ -32,6 +36,9 @@ fn bad_input_fails_cleanly_without_output() {
         (vec!["fem", "--material", missing.to_str().expect("utf8"), "--out", o], "cannot read"),
         (vec!["fem", "--material", nan_mat.to_str().expect("utf8"), "--out", o], "E2"),
         (vec!["fem", "--object", "A", "--out", "/nonexistent-dir/x.json"], "cannot"),
+        // A lump is read and checked whole, then refused where it is not modelled yet.
+        (vec!["fem", "--material", lump, "--out", o], "does not model inclusions yet"),
+        (vec!["fem", "--material", outside.to_str().expect("utf8"), "--out", o], "inclusion 1: its sphere"),
     ];
     for (args, needle) in cases {
         let r = run(&args);
@@ -79,6 +86,10 @@ fn bad_input_gets_one_clear_line_and_exit_code_1() {
     let out = dir.path().join("never.json");
     let o = out.to_str().expect("utf8");
     let missing = dir.path().join("missing.toml");
+    let lump = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/lump_5x_r8.toml");
+    let outside = dir.path().join("outside.toml");
+    let background = std::fs::read_to_string(lump).expect("the shipped lump").replace("0.082]", "0.095]");
+    std::fs::write(&outside, background).expect("write");
     let short = dir.path().join("short.toml");
     std::fs::write(&short, "symmetry = \"orthotropic\"\nE1 = 1.0\n").expect("write");
     let broken = dir.path().join("broken.toml");

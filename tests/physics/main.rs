@@ -5,6 +5,7 @@ mod calibration;
 mod dynamics;
 mod fem_reference;
 mod gpu_step;
+mod inclusion;
 mod msm_statics;
 mod probe_hold;
 mod probe_material;

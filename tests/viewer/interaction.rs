@@ -242,4 +242,8 @@ fn a_script_takes_a_material_file_from_its_folder() {
     assert!(format!("{e:#}").contains("\"material\""), "{e:#}");
     let e = run(&script(serde_json::json!({ "material": "no/such/file.toml" }))).expect_err("a missing file refused");
     assert!(format!("{e:#}").contains("no/such/file.toml"), "{e:#}");
+    // A material with a lump is read whole, then refused: nothing a script runs models it yet.
+    let lump = script(serde_json::json!({ "material": "lump_5x_r8.toml" }));
+    let e = tissue_sim::study::script::run_from(&lump, &folder).expect_err("a lump refused");
+    assert!(format!("{e:#}").contains("does not model inclusions yet"), "{e:#}");
 }

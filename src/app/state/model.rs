@@ -13,7 +13,7 @@ impl ViewerState {
         let (material, file) = match self.settings.object {
             Source::File => {
                 let path = std::path::PathBuf::from(self.settings.material_path.trim());
-                match Material::from_file(&path) {
+                match Material::from_file(&path).and_then(|m| m.require_homogeneous("the viewer").map(|()| m)) {
                     Ok(m) => (m, Some(path)),
                     Err(e) => {
                         self.shown.note = Some(format!("{e:#}"));

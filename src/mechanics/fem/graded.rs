@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use super::element::{ElementStiffness, hex8_box_stiffness};
+use super::element::{ElementStiffness, hex8_box_stiffness, hex8_box_stiffness_varying};
 use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::mechanics::material::Material;
 use crate::mechanics::sparse::{SparseError, SpdSystem};
@@ -141,7 +141,26 @@ impl GradedMesh {
     }
 }
 
-/// The stiffness of `material` on a graded mesh with face z = 0 clamped, factorised.
+/// Sub-boxes per axis of an element an inclusion's surface cuts ([`hex8_box_stiffness_varying`]).
+pub const SUB_CELLS: usize = 4;
+
+/// Which material fills the box `lo + [0, sides]` whole: `Some(None)` the background,
+/// `Some(Some(i))` inclusion `i`; `None` where an inclusion's surface cuts it.
+fn inside(material: &Material, lo: [f64; 3], sides: [f64; 3]) -> Option<Option<usize>> {
+    let hi: [f64; 3] = std::array::from_fn(|a| lo[a] + sides[a]);
+    let mut whole = None;
+    for (w, inclusion) in material.inclusions.iter().enumerate() {
+        match inclusion.meets_box(lo, hi) {
+            Some(false) => {}
+            Some(true) => whole = Some(w),
+            None => return None,
+        }
+    }
+    Some(whole)
+}
+
+/// The stiffness of `material` (its inclusions too) on a graded mesh with face z = 0 clamped,
+/// factorised.
 #[derive(Debug)]
 pub struct GradedFem {
     /// The mesh.
@@ -164,16 +183,25 @@ impl GradedFem {
         let n = 3 * mesh.num_nodes();
         let elements = (nx - 1) * (ny - 1) * (nz - 1);
         // One element matrix per distinct box (the mesh has few distinct sides).
-        let mut matrices: HashMap<[u64; 3], ElementStiffness> = HashMap::new();
+        let mut matrices: HashMap<([u64; 3], Option<usize>), ElementStiffness> = HashMap::new();
         let mut entries = Vec::with_capacity(elements * 300);
         let mut values = Vec::with_capacity(elements * 300);
         for k in 0..nz - 1 {
             for j in 0..ny - 1 {
                 for i in 0..nx - 1 {
                     let sides = [(0, i), (1, j), (2, k)].map(|(a, c)| mesh.axes[a][c + 1] - mesh.axes[a][c]);
-                    let ke = matrices
-                        .entry(sides.map(f64::to_bits))
-                        .or_insert_with(|| hex8_box_stiffness(&material.stiffness, sides));
+                    let lo = [(0, i), (1, j), (2, k)].map(|(a, c)| mesh.axes[a][c]);
+                    let cut;
+                    let ke = match inside(material, lo, sides) {
+                        Some(which) => matrices.entry((sides.map(f64::to_bits), which)).or_insert_with(|| {
+                            let c = which.map_or(&material.stiffness, |w| &material.inclusions[w].stiffness);
+                            hex8_box_stiffness(c, sides)
+                        }),
+                        None => {
+                            cut = hex8_box_stiffness_varying(|x| material.stiffness_at(x), lo, sides, SUB_CELLS);
+                            &cut
+                        }
+                    };
                     let nodes = super::element::NODE_SIGNS.map(|s| {
                         let o = s.map(|v| usize::from(v > 0.0));
                         mesh.node([i + o[0], j + o[1], k + o[2]])

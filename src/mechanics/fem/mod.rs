@@ -77,7 +77,9 @@ impl FemModel {
         k
     }
 
-    /// Builds the element matrix of `material` on `grid`.
+    /// Builds the element matrix of `material` on `grid`: one for every element, the background's
+    /// (the stencil models a homogeneous material; a material with inclusions is refused where it
+    /// enters, [`Material::require_homogeneous`], and modelled by [`graded::GradedFem`]).
     pub fn new(grid: Grid, material: &Material) -> Self {
         let ke = hex8_stiffness(&material.stiffness, grid.h());
         Self {

@@ -68,6 +68,9 @@ pub enum ComplianceError {
     /// A kept file does not match.
     #[error("surface compliance file: {0}")]
     File(String),
+    /// The material has inclusions, which the surface compliance does not model yet.
+    #[error(transparent)]
+    Material(#[from] crate::mechanics::material::MaterialError),
     /// The computation was stopped by its caller.
     #[error("the surface compliance was cancelled")]
     Cancelled,
@@ -100,6 +103,7 @@ impl SurfaceCompliance {
         divisions: usize,
         progress: &mut dyn FnMut(f64) -> bool,
     ) -> Result<Self, ComplianceError> {
+        material.require_homogeneous("the surface compliance")?;
         let c = &material.stiffness;
         let coupled = (0..3).any(|i| (3..6).any(|j| c[(i, j)] != 0.0))
             || c[(3, 4)] != 0.0

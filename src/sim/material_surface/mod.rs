@@ -252,6 +252,8 @@ pub fn load_or_compute(
     dir: Option<&Path>,
     report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
 ) -> anyhow::Result<Arc<SurfaceCompliance>> {
+    // The file's key is the background's stiffness: a material with inclusions is refused first.
+    material.require_homogeneous("the surface compliance")?;
     let kept = dir.map(|d| KeptFile::new(d, &file_name(material), KEPT));
     if let Some(kept) = &kept {
         match kept.read(MAX_FILE_BYTES) {

@@ -33,6 +33,7 @@ pub struct ModalBasis {
 impl ModalBasis {
     /// The lowest [`MODES`] modes of `material`'s hex8 FEM at 8^3 with face z = 0 clamped.
     pub fn of_material(material: &Material) -> Result<Self, String> {
+        material.require_homogeneous("the material's modes").map_err(|e| e.to_string())?;
         let grid = Grid::paper();
         let fem = crate::mechanics::fem::FemModel::new(grid, material);
         let model = crate::response::modal::ModalModel::fem(&fem, material.density);

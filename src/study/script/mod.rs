@@ -239,7 +239,10 @@ impl Script {
             (Some(o), None) => Ok(o.material()),
             (None, Some(file)) => {
                 let path = folder.join(file);
-                Material::from_file(&path).map_err(|e| anyhow::anyhow!("script: material {}: {e:#}", path.display()))
+                let material = Material::from_file(&path)
+                    .map_err(|e| anyhow::anyhow!("script: material {}: {e:#}", path.display()))?;
+                material.require_homogeneous("a script").map_err(|e| anyhow::anyhow!("script: {e}"))?;
+                Ok(material)
             }
             (Some(_), Some(_)) => anyhow::bail!("script: give \"object\" or \"material\", not both"),
             (None, None) => anyhow::bail!("script: \"object\" (A or B) or \"material\" (a material file) is needed"),

@@ -34,7 +34,7 @@ pub struct CacheFile {
     pub version: u32,
     /// The material's name.
     pub material: String,
-    /// Its stiffness `C` (Voigt, Pa), row by row: the key.
+    /// Its stiffness `C` (Voigt, Pa), row by row, and its inclusions' ([`Material::key`]): the key.
     pub stiffness: Vec<f64>,
     /// The answers.
     pub entries: Vec<Entry>,
@@ -140,12 +140,13 @@ fn read_forces(kept: &KeptFile, stiffness: &[f64]) -> Result<Option<CacheFile>, 
 }
 
 fn stiffness_key(material: &Material) -> Vec<f64> {
-    material.stiffness.transpose().iter().copied().collect()
+    material.key()
 }
 
-/// The file name of `material`'s answers: a hash of its stiffness and the method's version.
+/// The file name of `material`'s answers: a hash of its stiffness (its inclusions' too) and the
+/// method's version.
 pub fn file_name(material: &Material) -> String {
-    format!("continuum-{:016x}.json", crate::io::cache_key(VERSION, material.stiffness.iter()))
+    format!("continuum-{:016x}.json", crate::io::cache_key(VERSION, material.key().iter()))
 }
 
 impl ContinuumCache {
@@ -272,7 +273,7 @@ pub struct TapFile {
 pub fn tap_file_name(material: &Material) -> String {
     format!(
         "continuum-tap-{:016x}.json",
-        crate::io::cache_key((TAP_VERSION, material.density.to_bits()), material.stiffness.iter())
+        crate::io::cache_key((TAP_VERSION, material.density.to_bits()), material.key().iter())
     )
 }
 
