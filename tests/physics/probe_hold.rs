@@ -165,3 +165,32 @@ fn a_press_held_10_s_over_the_y_faces_is_steady() {
     grid_held_steady(1, false);
     grid_held_steady(1, true);
 }
+
+/// A press across the top/+x edge, released, then a press on the top face, and a pressed sphere
+/// jumping from the edge to the top face in one step: each contact reads the material's modes
+/// where it is (a press read them over the last contact's patch, at the edge, and its contact
+/// compliance less the modes' was not positive definite: the viewer paused).
+#[test]
+fn a_press_after_another_elsewhere_reads_the_modes_where_it_is() {
+    let edge = serde_json::json!([0.099, 0.043, 0.1]);
+    let top = serde_json::json!([0.0585, 0.0393, 0.1]);
+    let path = |keys: serde_json::Value| serde_json::json!({ "probe_path": { "radius": 0.015, "direction": [0, 0, -1], "sample_hz": 100, "keys": keys } });
+    let script = serde_json::json!({
+        "object": "A", "dt": 1e-3, "damping_ratio": 0.2,
+        "actions": [
+            path(serde_json::json!([{ "t": 0, "at": edge, "depth": 0.0007 }, { "t": 0.3, "at": edge, "depth": 0.003 },
+                                    { "t": 1.0, "at": edge, "depth": 0.003 }])),
+            { "release": {} },
+            { "wait": { "duration_s": 0.5 } },
+            path(serde_json::json!([{ "t": 0, "at": top, "depth": 0.0007 }, { "t": 0.3, "at": top, "depth": 0.004 },
+                                    { "t": 1.0, "at": top, "depth": 0.004 }])),
+            path(serde_json::json!([{ "t": 0, "at": edge, "depth": 0.003 }, { "t": 0.3, "at": edge, "depth": 0.003 },
+                                    { "t": 0.301, "at": top, "depth": 0.004 }, { "t": 1.0, "at": top, "depth": 0.004 }])),
+        ]
+    });
+    let script: Script = serde_json::from_value(script).expect("a script");
+    let out = run(&script).expect("every press solves");
+    let last = out.force_path.last().expect("samples").force_n;
+    // The material's static force there (measured 9.61 N in the viewer).
+    assert!((9.0..10.5).contains(&last), "{last} N");
+}

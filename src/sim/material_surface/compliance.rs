@@ -45,8 +45,9 @@ pub const MAX_CONTACT_NODES: usize = 600;
 #[derive(Debug, Clone, PartialEq)]
 pub struct SurfaceCompliance {
     lattice: Lattice,
-    /// Per family, per solved column node, per force component `b`, per target, per displacement
-    /// component `a`: metres per newton.
+    /// Per family, per solved column node, per target, per force component `b`, per displacement
+    /// component `a`: metres per newton (a target's 3 x 3 block in one place: a contact reads
+    /// blocks of many columns at a few targets).
     columns: Vec<f32>,
 }
 
@@ -125,7 +126,6 @@ impl SurfaceCompliance {
             let at: Vec<(usize, usize, f64)> =
                 f.targets.iter().map(|&q| mesh_point(&fem.mesh, f.axis, q, &lattice.coords)).collect();
             let n = fem.fixed.len();
-            let per = 3 * at.len();
             let nodes: Vec<usize> = (0..f.columns()).collect();
             for batch in nodes.chunks(BATCH_NODES) {
                 let cols = 3 * batch.len();
@@ -138,12 +138,12 @@ impl SurfaceCompliance {
                 }
                 fem.solve_columns(&mut rhs, cols)?;
                 for (b, &k) in batch.iter().enumerate() {
-                    for c in 0..3 {
-                        let col = &rhs[(3 * b + c) * n..(3 * b + c + 1) * n];
-                        let start = f.offset + (3 * k + c) * per;
-                        for (out, &(lo, hi, w)) in columns[start..start + per].chunks_exact_mut(3).zip(&at) {
+                    let start = f.offset + k * 9 * at.len();
+                    for (block, &(lo, hi, w)) in columns[start..start + 9 * at.len()].chunks_exact_mut(9).zip(&at) {
+                        for c in 0..3 {
+                            let col = &rhs[(3 * b + c) * n..(3 * b + c + 1) * n];
                             for a in 0..3 {
-                                out[a] = ((1.0 - w) * col[3 * lo + a] + w * col[3 * hi + a]) as f32;
+                                block[3 * c + a] = ((1.0 - w) * col[3 * lo + a] + w * col[3 * hi + a]) as f32;
                             }
                         }
                     }
@@ -170,11 +170,11 @@ impl SurfaceCompliance {
         let f = &self.lattice.families[source.family as usize];
         let sign =
             [f64::from(u8::from(!source.flip[0])) * 2.0 - 1.0, f64::from(u8::from(!source.flip[1])) * 2.0 - 1.0, 1.0];
-        let per = 3 * f.targets.len();
-        let base = f.offset + 3 * source.column as usize * per + 3 * t;
+        let base = f.offset + 9 * (source.column as usize * f.targets.len() + t);
+        let block = &self.columns[base..base + 9];
         let mut v = 0.0;
         for b in 0..3 {
-            let col = &self.columns[base + b * per..][..3];
+            let col = &block[3 * b..3 * b + 3];
             let w = col[0] as f64 * n_q[0] * sign[0] + col[1] as f64 * n_q[1] * sign[1] + col[2] as f64 * n_q[2];
             v += w * n_p[b] * sign[b];
         }
@@ -384,6 +384,18 @@ pub struct ContactScratch {
 }
 
 impl ContactScratch {
+    /// No contact, and no warm start for the next press.
+    pub fn clear(&mut self) {
+        let c = &mut self.contact;
+        c.candidates.clear();
+        c.active.clear();
+        c.lambda.clear();
+        self.nodes.clear();
+        self.points.clear();
+        self.sources.clear();
+        self.previous.clear();
+    }
+
     /// The contact of the last press: surface node, outward normal, normal force (newtons).
     pub fn contacts(&self) -> impl Iterator<Item = (usize, [f64; 3], f64)> + '_ {
         let c = &self.contact;

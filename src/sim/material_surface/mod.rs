@@ -23,6 +23,8 @@ pub mod modal_lag;
 use std::path::Path;
 use std::sync::Arc;
 
+use glam::DVec3;
+
 use crate::io::cache::{CacheEvent, KeptFile, StderrReport};
 
 use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
@@ -94,11 +96,13 @@ impl SurfaceProbe {
         }
     }
 
-    /// The sphere is not on the face: no loads.
+    /// The sphere is not on the face: no loads, no contact (the next press starts afresh where it
+    /// lands: its modes read under the sphere, not over the last contact's patch).
     pub fn release(&mut self) {
         self.loads.clear();
         self.force = [0.0; 3];
         self.last = None;
+        self.scratch.clear();
         if let Some(lag) = &mut self.lag {
             lag.release();
         }
@@ -137,12 +141,19 @@ impl SurfaceProbe {
         let span = if still { super::TICK_S.max(dt) } else { dt };
         self.last = None;
         // The modes' response over the span, read over the patch the contact's net force is
-        // spread on (the last contact's, weighted by its forces; before one, the surface point
-        // nearest the sphere's centre): the surface moves by `free - G F` there.
+        // spread on (the last contact's, weighted by its forces, where the sphere still covers
+        // it; before one, or after a jump, the surface point nearest the sphere's centre): the
+        // surface moves by `free - G F` there.
         let (free, coupling) = match self.lag.as_mut() {
             Some(lag) => {
                 let (scratch, compliance) = (&self.scratch, &self.compliance);
-                if scratch.contacts().any(|(_, _, l)| l > 0.0) {
+                let (mut sum, mut weight) = (DVec3::ZERO, 0.0);
+                for (q, _, l) in scratch.contacts() {
+                    sum += DVec3::from(compliance.position(q)) * l.max(0.0);
+                    weight += l.max(0.0);
+                }
+                let reach = radius + compliance.spacing();
+                if weight > 0.0 && (sum / weight).distance(DVec3::from(centre)) < reach {
                     lag.set_patch(scratch.contacts().map(|(q, _, l)| (compliance.position(q), l)));
                 } else {
                     lag.set_patch(std::iter::once((centre.map(|c| c.clamp(0.0, CUBE_SIDE_M)), 1.0)));

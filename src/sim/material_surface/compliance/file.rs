@@ -27,8 +27,9 @@ pub const FILE_MAGIC: [u8; 8] = *b"TSIMSCMP";
 /// checksum).
 pub const FILE_FORMAT: u32 = 2;
 /// The version of the computation: a change of method makes old files refused (1 held the top
-/// face only; 2 a uniform lattice, without the halved rows across the edges).
-pub const METHOD_VERSION: u32 = 3;
+/// face only; 2 a uniform lattice, without the halved rows across the edges; 3 held a column's
+/// three force components apart, not a target's 3 x 3 block together).
+pub const METHOD_VERSION: u32 = 4;
 /// Bytes of the header in front of the columns.
 const HEADER_BYTES: usize = 320;
 /// The checksum covers the bytes from here to the end (the key and the columns).
