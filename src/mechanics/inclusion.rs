@@ -8,7 +8,8 @@
 //! radius = 0.008                   # metres
 //! scale = 5.0                      # its stiffness C is 5 times the background's
 //! # or, instead of `scale`, its own moduli with the keys of a material:
-//! # symmetry = "orthotropic", units = "kPa", E1 = ..., nu12 = ..., G12 = ...
+//! # symmetry = "orthotropic", E1 = ..., nu12 = ..., G12 = ... (in the file's `units` unless
+//! # it gives its own)
 //! ```
 //!
 //! Each is checked like every input, with a one-line error naming the inclusion: inside the cube,
@@ -76,8 +77,9 @@ pub struct InclusionFile {
 }
 
 impl InclusionFile {
-    /// The moduli it gives as a material file's keys, if any.
-    fn moduli(&self) -> Option<MaterialFile> {
+    /// The moduli it gives as a material file's keys, if any, in its `units` or else the file's
+    /// (`units`).
+    fn moduli(&self, units: Option<&str>) -> Option<MaterialFile> {
         let given = [self.E1, self.E2, self.E3, self.nu12, self.nu13, self.nu23, self.G12, self.G13, self.G23];
         if self.symmetry.is_none() && self.units.is_none() && given.iter().all(Option::is_none) {
             return None;
@@ -85,7 +87,7 @@ impl InclusionFile {
         Some(MaterialFile {
             name: None,
             symmetry: self.symmetry.unwrap_or(Symmetry::Orthotropic),
-            units: self.units.clone(),
+            units: self.units.clone().or_else(|| units.map(str::to_owned)),
             density: None,
             E1: self.E1,
             E2: self.E2,
@@ -101,9 +103,10 @@ impl InclusionFile {
     }
 }
 
-/// The inclusions `files` list, in a background of stiffness `background`, checked; the error is
-/// one line naming the inclusion (1-based) and what is wrong.
-pub fn read(files: &[InclusionFile], background: &Matrix6<f64>) -> Result<Vec<Inclusion>, String> {
+/// The inclusions `files` list, in a background of stiffness `background` whose file gives its
+/// moduli in `units` (an inclusion's own moduli are in these unless it says), checked; the error
+/// is one line naming the inclusion (1-based) and what is wrong.
+pub fn read(files: &[InclusionFile], background: &Matrix6<f64>, units: Option<&str>) -> Result<Vec<Inclusion>, String> {
     let mut out: Vec<Inclusion> = Vec::with_capacity(files.len());
     for (i, f) in files.iter().enumerate() {
         let n = i + 1;
@@ -129,7 +132,7 @@ pub fn read(files: &[InclusionFile], background: &Matrix6<f64>) -> Result<Vec<In
                 crate::io::num(f.radius)
             )));
         }
-        let stiffness = match (f.scale, f.moduli()) {
+        let stiffness = match (f.scale, f.moduli(units)) {
             (Some(_), Some(_)) => return Err(say("give either scale or its own moduli, not both".into())),
             (None, None) => return Err(say("give its stiffness: scale, or its own moduli (symmetry, E1, ...)".into())),
             (Some(s), None) => {
@@ -177,9 +180,21 @@ mod tests {
     }
 
     #[test]
+    fn a_lumps_own_moduli_are_in_the_files_units_unless_it_says() {
+        let c = crate::mechanics::material::Material::object_a().stiffness;
+        let own = "centre = [0.05, 0.05, 0.05]\nradius = 0.005\nsymmetry = \"transversely_isotropic\"\n\
+                   E1 = 500.0\nE2 = 400.0\nnu12 = 0.3\nnu23 = 0.3\nG12 = 150.0\n";
+        let f: InclusionFile = toml::from_str(own).expect("parses");
+        let kpa = read(std::slice::from_ref(&f), &c, Some("kPa")).expect("in kPa");
+        let pa = read(&[toml::from_str(&format!("{own}units = \"Pa\"\n")).expect("parses")], &c, Some("kPa"));
+        assert!((kpa[0].stiffness[(0, 0)] / 5e5 - 1.0).abs() < 1.0, "{}", kpa[0].stiffness[(0, 0)]);
+        assert!((pa.expect("in Pa")[0].stiffness[(0, 0)] * 1e3 / kpa[0].stiffness[(0, 0)] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
     fn a_lump_is_checked_and_knows_its_inside() {
         let c = crate::mechanics::material::Material::object_a().stiffness;
-        let ok = read(&[lump([0.05, 0.05, 0.082], 0.008, Some(5.0))], &c).expect("a valid lump");
+        let ok = read(&[lump([0.05, 0.05, 0.082], 0.008, Some(5.0))], &c, None).expect("a valid lump");
         assert_eq!(ok[0].stiffness, c * 5.0);
         assert!(ok[0].contains([0.05, 0.05, 0.089]) && !ok[0].contains([0.05, 0.05, 0.091]));
         assert_eq!(ok[0].meets_box([0.048, 0.048, 0.08], [0.052, 0.052, 0.084]), Some(true));
@@ -194,7 +209,7 @@ mod tests {
             (vec![lump([0.05, 0.05, 0.05], 0.008, None)], "give its stiffness"),
             (vec![lump([0.05, 0.05, 0.05], 0.008, Some(2.0)), lump([0.05, 0.05, 0.06], 0.005, Some(3.0))], "overlaps"),
         ] {
-            let e = read(&files, &c).expect_err(needle);
+            let e = read(&files, &c, None).expect_err(needle);
             assert!(e.contains(needle) && e.starts_with("inclusion ") && !e.contains('\n'), "{e}");
         }
     }

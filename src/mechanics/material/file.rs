@@ -138,7 +138,8 @@ impl MaterialFile {
                 )
             }
         }?;
-        let inclusions = inclusion::read(&self.inclusion, &background.stiffness).map_err(parse)?;
+        let inclusions =
+            inclusion::read(&self.inclusion, &background.stiffness, self.units.as_deref()).map_err(parse)?;
         Ok(Material { inclusions, ..background })
     }
 }

@@ -342,17 +342,18 @@ fn for_window(coords: &[f64], centre: [f64; 3], radius: f64, mut f: impl FnMut([
     let hi = |x: f64| coords.partition_point(|&c| c <= x + reach).clamp(1, d + 1) - 1;
     let c = DVec3::from(centre);
     let at = |i: usize| coords[i];
+    let (ilo, ihi) = (lo(centre[0]), hi(centre[0]));
     for k in lo(centre[2])..=hi(centre[2]) {
         for j in lo(centre[1])..=hi(centre[1]) {
-            let side = j == 0 || j == d;
-            for i in lo(centre[0])..=hi(centre[0]) {
-                if !(k == d || side || i == 0 || i == d) {
-                    continue;
-                }
+            // A row on a face of the cube is surface throughout; any other only at its two ends.
+            let whole = k == d || j == 0 || j == d;
+            let ends = [0, d].into_iter().filter(|&i| (ilo..=ihi).contains(&i));
+            let mut row = (ilo..=ihi).filter(|_| whole).chain(ends.filter(|_| !whole));
+            if !row.all(|i| {
                 let x = [at(i), at(j), at(k)];
-                if (DVec3::from(x) - c).length() < reach && !f([i, j, k], x) {
-                    return;
-                }
+                (DVec3::from(x) - c).length() >= reach || f([i, j, k], x)
+            }) {
+                return;
             }
         }
     }

@@ -199,6 +199,8 @@ fn change(a: &[f64], h: f64, b: &[f64], h_ref: f64) -> f64 {
 /// `progress(message)` says what is being run.
 pub fn continuum_tap(material: &Material, zeta: f64, progress: &mut dyn FnMut(&str)) -> anyhow::Result<ContinuumTap> {
     let zeta = crate::response::damping::check_ratio(zeta).map_err(anyhow::Error::msg)?;
+    // The damping's fundamental comes from a homogeneous FEM.
+    material.require_homogeneous("the material's tap")?;
     let grid = Grid::new(16).map_err(anyhow::Error::msg)?;
     let fem = crate::mechanics::fem::FemModel::new(grid, material);
     let modal = crate::response::modal::ModalModel::fem(&fem, material.density);
