@@ -62,11 +62,16 @@ pub struct ParamArgs {
 impl ObjectArgs {
     /// The chosen material, or `fallback` (an object label from a file) when none is given.
     pub fn material(&self, fallback: Option<&str>) -> anyhow::Result<Material> {
+        let material = self.material_with_inclusions(fallback)?;
+        // Read and checked whole (the inclusions too), then refused where not modelled yet.
+        material.require_homogeneous("this command")?;
+        Ok(material)
+    }
+
+    /// [`ObjectArgs::material`] for a command that models inclusions.
+    pub fn material_with_inclusions(&self, fallback: Option<&str>) -> anyhow::Result<Material> {
         if let Some(path) = &self.material {
-            let material = Material::from_file(path)?;
-            // Read and checked whole (the inclusions too), then refused where not modelled yet.
-            material.require_homogeneous("the command line")?;
-            return Ok(material);
+            return Ok(Material::from_file(path)?);
         }
         let name = self.object.as_deref().or(fallback).context("give --object A|B or --material FILE")?;
         Material::preset(&name.to_ascii_uppercase())

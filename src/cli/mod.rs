@@ -9,7 +9,7 @@
 //! here.
 //!
 //! Subcommands: [`fem`], [`msm`], [`errors`], [`validate`], [`calibrate`], [`reproduce`],
-//! [`dynamics`], [`chart`], [`choose`], [`mod@bench`], [`render`], [`simulate`], [`view`].
+//! [`dynamics`], [`chart`], [`choose`], [`mod@bench`], [`render`], [`simulate`], [`view`], [`palpate`].
 
 use std::process::ExitCode;
 
@@ -25,6 +25,7 @@ pub mod errors;
 pub mod fem;
 pub mod msm;
 mod output;
+pub mod palpate;
 pub mod render;
 pub mod reproduce;
 pub mod simulate;
@@ -79,6 +80,9 @@ pub enum Command {
     Dynamics(dynamics::DynamicsArgs),
     /// Speed benchmark of the physics core (release build).
     Bench(bench::BenchArgs),
+    /// A palpation map: the probe pressed at a grid of points over one face, the material's force
+    /// (its inclusions felt) against its background's (map.json, map.csv, map.png in DIR).
+    Palpate(palpate::PalpateArgs),
 }
 
 /// Runs the command line and maps errors (the argument parser's included) to a message and exit
@@ -126,6 +130,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Simulate(args) => simulate::run(args),
         Command::View(args) => view::run(args),
         Command::Validate(args) => validate::run(args),
+        Command::Palpate(args) => palpate::run(args),
         Command::Dynamics(args) => dynamics::run(args),
         Command::Bench(args) => bench::run(args),
     }

@@ -21,6 +21,9 @@ pub enum CacheEvent<'a> {
         /// The cache folder the answer will be kept in, or `None` where it lives in memory only.
         kept_in: Option<&'a Path>,
     },
+    /// A further part of the work starts, computed in memory and not kept (its progress counts
+    /// from 0 again): what it computes.
+    Part(&'a str),
     /// This fraction of the work (0 to 1) is done; the callback's `false` stops the work.
     Progress(f64),
     /// One line for the user about the cache (a file refused, a folder that cannot keep the
@@ -200,6 +203,8 @@ impl KeptFile {
 pub struct StderrReport {
     what: String,
     about: String,
+    /// The part of the work under way ([`CacheEvent::Part`]), else `what`.
+    part: String,
     started: Option<Instant>,
     next_tenth: u32,
 }
@@ -208,7 +213,7 @@ impl StderrReport {
     /// The report of computing `what` ("the material's surface compliance"), which takes about
     /// `about` ("40 s").
     pub fn new(what: &str, about: &str) -> Self {
-        Self { what: what.to_owned(), about: about.to_owned(), started: None, next_tenth: 1 }
+        Self { what: what.to_owned(), about: about.to_owned(), part: what.to_owned(), started: None, next_tenth: 1 }
     }
 
     /// Says `event` on standard error; `true`: the work goes on.
@@ -226,8 +231,15 @@ impl StderrReport {
             CacheEvent::Computing { kept_in } => {
                 self.started = Some(Instant::now());
                 self.next_tenth = 1;
+                self.part.clone_from(&self.what);
                 let kept = kept_in.map_or_else(|| "not kept".to_owned(), |d| format!("kept in {}", d.display()));
                 Some(format!("computing {} (about {}, {kept})", self.what, self.about))
+            }
+            CacheEvent::Part(what) => {
+                self.started = Some(Instant::now());
+                self.next_tenth = 1;
+                what.clone_into(&mut self.part);
+                Some(format!("computing {what} (not kept)"))
             }
             CacheEvent::Progress(f) => {
                 let tenth = (f.clamp(0.0, 1.0) * 10.0 + 1e-9).floor() as u32;
@@ -236,7 +248,7 @@ impl StderrReport {
                 }
                 self.next_tenth = tenth + 1;
                 let s = self.started.map_or(0.0, |t| t.elapsed().as_secs_f64());
-                Some(format!("{}: {} %, {s:.0} s", self.what, 10 * tenth))
+                Some(format!("{}: {} %, {s:.0} s", self.part, 10 * tenth))
             }
         }
     }

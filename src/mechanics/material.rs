@@ -330,6 +330,11 @@ impl Material {
         key
     }
 
+    /// The material without its inclusions.
+    pub fn background(&self) -> Self {
+        Self { inclusions: Vec::new(), ..self.clone() }
+    }
+
     /// `Ok` for a material without inclusions; else the error that `what` does not model them.
     pub fn require_homogeneous(&self, what: &'static str) -> Result<(), MaterialError> {
         if self.inclusions.is_empty() {

@@ -3,13 +3,14 @@
 //! the smallest model that meets a scene's error and rate budget ([`choose`]), the paper's tables
 //! and figures ([`reproduce`]), timings ([`timing`], [`bench`](mod@bench): its sweep of
 //! resolutions and its GPU figures, both on the viewer's scene with the probe pressed) and
-//! scripted interaction ([`script`], `simulate`).
+//! scripted interaction ([`script`], `simulate`) and palpation maps ([`palpate`]).
 //!
 //! May use: calibrate, validate, gpu, sim, response, mechanics, io.
 
 pub mod bench;
 pub mod chart;
 pub mod choose;
+pub mod palpate;
 pub mod reproduce;
 pub mod script;
 pub mod stability;

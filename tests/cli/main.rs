@@ -11,6 +11,7 @@ mod calibrate;
 mod chart;
 mod commands;
 mod docs;
+mod palpate;
 mod simulate;
 mod validate;
 

@@ -50,7 +50,7 @@ impl ViewerState {
                         eprintln!("{line}");
                         true
                     }
-                    crate::io::cache::CacheEvent::Computing { .. } => true,
+                    crate::io::cache::CacheEvent::Computing { .. } | crate::io::cache::CacheEvent::Part(_) => true,
                 });
                 ctx.send(ComplianceMessage::Done(r.map_err(|e| format!("{e:#}"))));
             },

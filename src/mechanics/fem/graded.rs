@@ -122,6 +122,20 @@ impl GradedMesh {
         [node % nx, (node / nx) % ny, node / (nx * ny)]
     }
 
+    /// The nodes of the box holding the point `x` (metres, inside the cube) and their trilinear
+    /// weights.
+    pub fn corners(&self, x: [f64; 3]) -> [(usize, f64); 8] {
+        let at: [(usize, f64); 3] = std::array::from_fn(|a| {
+            let line = &self.axes[a];
+            let i = line.partition_point(|&y| y <= x[a]).clamp(1, line.len() - 1) - 1;
+            (i, ((x[a] - line[i]) / (line[i + 1] - line[i])).clamp(0.0, 1.0))
+        });
+        super::element::NODE_SIDES.map(|o| {
+            let w: f64 = (0..3).map(|a| if o[a] == 1 { at[a].1 } else { 1.0 - at[a].1 }).product();
+            (self.node(std::array::from_fn(|a| at[a].0 + o[a])), w)
+        })
+    }
+
     /// Rest position of a node, metres.
     pub fn position(&self, node: usize) -> [f64; 3] {
         let ijk = self.ijk(node);
@@ -157,6 +171,47 @@ fn inside(material: &Material, lo: [f64; 3], sides: [f64; 3]) -> Option<Option<u
         }
     }
     Some(whole)
+}
+
+/// The stiffness `material`'s inclusions add to its background's on `mesh`: the nodes of the
+/// elements an inclusion meets (ascending) and the change of `K` on their dofs (`3 n` square,
+/// column-major; an element the inclusion's surface cuts by sub-cell quadrature, as assembled).
+pub fn inclusion_change(mesh: &GradedMesh, material: &Material) -> (Vec<usize>, Vec<f64>) {
+    let [nx, ny, nz] = mesh.dims();
+    let mut changed: Vec<([usize; 8], ElementStiffness)> = Vec::new();
+    for k in 0..nz - 1 {
+        for j in 0..ny - 1 {
+            for i in 0..nx - 1 {
+                let sides = [(0, i), (1, j), (2, k)].map(|(a, c)| mesh.axes[a][c + 1] - mesh.axes[a][c]);
+                let lo = [(0, i), (1, j), (2, k)].map(|(a, c)| mesh.axes[a][c]);
+                let ke = match inside(material, lo, sides) {
+                    Some(None) => continue,
+                    Some(Some(w)) => hex8_box_stiffness(&material.inclusions[w].stiffness, sides),
+                    None => hex8_box_stiffness_varying(|x| material.stiffness_at(x), lo, sides, SUB_CELLS),
+                };
+                let nodes = super::element::NODE_SIGNS.map(|s| {
+                    let o = s.map(|v| usize::from(v > 0.0));
+                    mesh.node([i + o[0], j + o[1], k + o[2]])
+                });
+                changed.push((nodes, ke - hex8_box_stiffness(&material.stiffness, sides)));
+            }
+        }
+    }
+    let mut nodes: Vec<usize> = changed.iter().flat_map(|(n, _)| *n).collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let m = 3 * nodes.len();
+    let mut change = vec![0.0; m * m];
+    for (element, ke) in &changed {
+        let row = |l: usize| 3 * nodes.partition_point(|&n| n < element[l / 3]) + l % 3;
+        for b in 0..24 {
+            let column = m * row(b);
+            for a in 0..24 {
+                change[column + row(a)] += ke[(a, b)];
+            }
+        }
+    }
+    (nodes, change)
 }
 
 /// The stiffness of `material` (its inclusions too) on a graded mesh with face z = 0 clamped,

@@ -25,8 +25,10 @@ use crate::mechanics::sparse::SparseError;
 
 pub mod file;
 pub mod lattice;
+pub mod lump;
 pub use file::{FILE_FORMAT, FILE_MAGIC, FileError, METHOD_VERSION};
 use lattice::{Lattice, Source};
+use lump::LumpCorrection;
 
 /// Divisions of a face per axis: 2 mm spacing.
 pub const DEFAULT_DIVISIONS: usize = 50;
@@ -49,6 +51,8 @@ pub struct SurfaceCompliance {
     /// component `a`: metres per newton (a target's 3 x 3 block in one place: a contact reads
     /// blocks of many columns at a few targets).
     columns: Vec<f32>,
+    /// What the material's inclusions change, near them (none for a homogeneous material).
+    lump: Option<LumpCorrection>,
 }
 
 /// Errors of the surface compliance.
@@ -83,7 +87,7 @@ impl SurfaceCompliance {
     #[cfg(test)]
     pub(crate) fn uniform(divisions: usize, value: f32) -> Self {
         let lattice = Lattice::new(divisions);
-        Self { columns: vec![value; lattice.values], lattice }
+        Self { columns: vec![value; lattice.values], lattice, lump: None }
     }
 
     /// Lattice spacing (away from the edges), metres.
@@ -93,7 +97,27 @@ impl SurfaceCompliance {
 
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
-        self.columns.len() * 4
+        self.columns.len() * 4 + self.lump.as_ref().map_or(0, LumpCorrection::memory_bytes)
+    }
+
+    /// The compliance of `material`, whose background's this is: with the change its inclusions
+    /// make ([`lump`]; none where it has none); `progress` as [`SurfaceCompliance::compute`]'s.
+    pub fn with_inclusions(
+        mut self,
+        material: &Material,
+        progress: &mut dyn FnMut(f64) -> bool,
+    ) -> Result<Self, ComplianceError> {
+        self.lump = if material.inclusions.is_empty() {
+            None
+        } else {
+            Some(LumpCorrection::compute(&self.lattice, material, progress)?)
+        };
+        Ok(self)
+    }
+
+    /// The inclusions' correction, where the material has inclusions.
+    pub fn lump(&self) -> Option<&LumpCorrection> {
+        self.lump.as_ref()
     }
 
     /// Computes the compliance of `material` with `divisions` divisions per axis (even);
@@ -154,7 +178,7 @@ impl SurfaceCompliance {
                 }
             }
         }
-        Ok(Self { lattice, columns })
+        Ok(Self { lattice, columns, lump: None })
     }
 
     /// Rest position of surface node `q`, metres.
@@ -243,7 +267,7 @@ impl SurfaceCompliance {
                 c.active.push(w);
             }
         }
-        let mut body = SurfaceNodes { compliance: self, points, sources, coupling };
+        let mut body = SurfaceNodes { compliance: self, nodes, points, sources, coupling };
         let solved = contact::solve(&mut body, c, 1e-9 * radius);
         previous.clear();
         solved?;
@@ -302,6 +326,8 @@ fn mesh_point(mesh: &GradedMesh, axis: usize, q: [usize; 3], coords: &[f64]) -> 
 /// The surface nodes under the sphere as the contact sees them.
 struct SurfaceNodes<'a> {
     compliance: &'a SurfaceCompliance,
+    /// Surface node of each candidate.
+    nodes: &'a [usize],
     /// Lattice point of each candidate.
     points: &'a [[usize; 3]],
     /// How each candidate's column is found.
@@ -326,7 +352,8 @@ impl contact::Compliance for SurfaceNodes<'_> {
                 (None, None) => 0.0,
             }
         };
-        w - modes
+        let lump = c.lump.as_ref().map_or(0.0, |l| l.normal(self.nodes[j], n_j, self.nodes[i], n_i));
+        w - lump - modes
     }
 }
 

@@ -220,7 +220,9 @@ impl MaterialSurface {
         report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
     ) -> anyhow::Result<Self> {
         let compliance = load_or_compute(material, dir, report)?;
-        let modes = Arc::new(ModalBasis::of_material(material).map_err(anyhow::Error::msg)?);
+        // The background's modes: the inclusions change the slow modes little, and the force
+        // held still is the compliance's, inclusions and all.
+        let modes = Arc::new(ModalBasis::of_material(&material.background()).map_err(anyhow::Error::msg)?);
         Ok(Self { compliance, modes })
     }
 }
@@ -257,14 +259,41 @@ pub fn stderr_report() -> StderrReport {
 /// - the work's start and progress (its `false` stops the work);
 /// - a line where the write after the work fails: the computed answer is used all the same.
 ///
+/// A material with inclusions: its background's compliance so (the file is the background's),
+/// then the change its inclusions make ([`compliance::lump`], seconds), computed in memory
+/// ([`CacheEvent::Part`] and its progress).
+///
 /// The errors are the computation's only: never the cache's.
 pub fn load_or_compute(
     material: &Material,
     dir: Option<&Path>,
     report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
 ) -> anyhow::Result<Arc<SurfaceCompliance>> {
-    // The file's key is the background's stiffness: a material with inclusions is refused first.
-    material.require_homogeneous("the surface compliance")?;
+    Ok(with_background(material, dir, report)?.1)
+}
+
+/// [`load_or_compute`]'s compliance of the material's background (without its inclusions) and
+/// of the material (the same where it has none).
+pub fn with_background(
+    material: &Material,
+    dir: Option<&Path>,
+    report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
+) -> anyhow::Result<(Arc<SurfaceCompliance>, Arc<SurfaceCompliance>)> {
+    let background = load_or_compute_background(&material.background(), dir, report)?;
+    if material.inclusions.is_empty() {
+        return Ok((Arc::clone(&background), background));
+    }
+    report(CacheEvent::Part("the change the inclusions make"));
+    let lumpy = (*background).clone().with_inclusions(material, &mut |f| report(CacheEvent::Progress(f)))?;
+    Ok((background, Arc::new(lumpy)))
+}
+
+/// [`load_or_compute`] for a material without inclusions.
+fn load_or_compute_background(
+    material: &Material,
+    dir: Option<&Path>,
+    report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
+) -> anyhow::Result<Arc<SurfaceCompliance>> {
     let kept = dir.map(|d| KeptFile::new(d, &file_name(material), KEPT));
     if let Some(kept) = &kept {
         match kept.read(MAX_FILE_BYTES) {

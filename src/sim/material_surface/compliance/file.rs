@@ -156,7 +156,7 @@ impl SurfaceCompliance {
         if columns.iter().any(|v| !v.is_finite()) {
             return Err(FileError::NotFinite);
         }
-        Ok(Self { lattice, columns })
+        Ok(Self { lattice, columns, lump: None })
     }
 }
 
@@ -168,7 +168,7 @@ mod tests {
     fn small() -> SurfaceCompliance {
         let lattice = super::super::lattice::Lattice::new(2);
         let columns = (0..lattice.values).map(|i| 1e-6 * i as f32).collect();
-        SurfaceCompliance { lattice, columns }
+        SurfaceCompliance { lattice, columns, lump: None }
     }
 
     /// `bytes` with the checksum made to match again (a file written so).
