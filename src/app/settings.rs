@@ -72,6 +72,10 @@ pub struct ViewSettings {
     pub compute: crate::gpu::Compute,
     /// Where `view --record` writes the recording.
     pub recording: Option<std::path::PathBuf>,
+    /// What a hidden lump is drawn from (find the lump).
+    pub lump_ranges: crate::app::exercise::Ranges,
+    /// The next hidden lump's seed.
+    pub lump_seed: u64,
 }
 
 impl Default for ViewSettings {
@@ -99,6 +103,8 @@ impl Default for ViewSettings {
             nodes: crate::mechanics::grid::Grid::paper().n(),
             compute: crate::gpu::Compute::Cpu,
             recording: None,
+            lump_ranges: crate::app::exercise::Ranges::default(),
+            lump_seed: 1,
         }
     }
 }
@@ -146,9 +152,23 @@ pub struct Shown {
     pub last_probe: Option<([f64; 3], f64)>,
     /// The FEM's and the model's probe force at the last probe position, solved on request.
     pub fem_probe: Option<ProbeComparison>,
+    /// The material file's inclusions: the probe feels them; the model shown steps `material`,
+    /// their background (the lattices and the FEM do not take inclusions yet).
+    pub inclusions: Vec<crate::mechanics::inclusion::Inclusion>,
+    /// Find the lump, while under way (its lump hidden until marked).
+    pub exercise: Option<crate::app::exercise::Exercise>,
 }
 
 impl Shown {
+    /// The material the probe feels: the background with the file's inclusions and the hidden
+    /// lump.
+    pub fn felt_material(&self) -> Material {
+        let mut m = self.material.clone();
+        m.inclusions.clone_from(&self.inclusions);
+        m.inclusions.extend(self.exercise.iter().map(|e| e.lump.inclusion.clone()));
+        m
+    }
+
     /// The lattice of the running parameters.
     pub fn topology(&self) -> Topology {
         self.params.topology()

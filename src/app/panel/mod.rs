@@ -2,9 +2,10 @@
 //! settings directly and return [`Request`]s for everything else; none calls the physics thread.
 //!
 //! One file per section: [`model`] (object, model, resolution, compute), [`integrator`], [`tools`],
-//! [`view`], [`calibration`] and [`study`] (speed vs accuracy).
+//! [`view`], [`find_lump`], [`calibration`] and [`study`] (speed vs accuracy).
 
 pub mod calibration;
+pub mod find_lump;
 pub mod integrator;
 pub mod model;
 pub mod study;
@@ -58,6 +59,9 @@ pub fn show(
         .default_open(true)
         .show(ui, |ui| tools::show(ui, settings, shown, ctx, requests));
     egui::CollapsingHeader::new("View").default_open(true).show(ui, |ui| view::show(ui, settings, camera));
+    egui::CollapsingHeader::new("Find the lump")
+        .default_open(!shown.inclusions.is_empty() || shown.exercise.is_some())
+        .show(ui, |ui| find_lump::show(ui, settings, shown, requests));
     egui::CollapsingHeader::new("Speed vs accuracy").default_open(false).show(ui, |ui| {
         let repaint = ui.ctx().clone();
         match settings.object {

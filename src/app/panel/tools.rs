@@ -150,11 +150,15 @@ fn probe_settings(ui: &mut egui::Ui, settings: &mut ViewSettings) {
 fn contact_line(shown: &Shown, ctx: &PanelContext<'_>) -> String {
     match (&shown.contact_status, ctx.published.surface_probe) {
         (Some(status), _) => status.clone(),
-        (None, true) => "probe contact: the material's surface compliance (every free face, 2 mm grid; within \
-                         3.2 % of the material on the validation presses, but up to 18 % on edges pressed at most \
-                         2.5 mm) with its 192 lowest modes (inertia and damping: a fast \
-                         tap within 10 % of the material's)"
-            .into(),
+        (None, true) => {
+            let lumps = shown.felt_material().inclusions.len();
+            let felt = if lumps > 0 { format!("; its {lumps} inclusion(s) felt within 3 %") } else { String::new() };
+            format!(
+                "probe contact: the material's surface compliance (every free face, 2 mm grid, 1 mm across the edges; \
+                 within 3.6 % of the material on every scored press{felt}) with its 192 lowest modes (inertia and \
+                 damping: a fast tap within 4 % of the material's)"
+            )
+        }
         (None, false) => "probe contact: the model's surface nodes".into(),
     }
 }

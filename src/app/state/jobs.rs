@@ -4,7 +4,11 @@
 use std::sync::Arc;
 
 use super::super::physics::Command;
+use crate::app::exercise::FELT_DEPTH_M;
+use crate::io::cache::CacheEvent;
+use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::sim::material_surface::MaterialSurface;
+use crate::sim::material_surface::compliance::{ContactScratch, SurfaceCompliance};
 
 use super::super::calibration_job;
 use super::{ProbeComparison, ViewerState};
@@ -15,10 +19,12 @@ use crate::sim::Model;
 /// Messages of the surface compliance job.
 #[derive(Debug)]
 pub(super) enum ComplianceMessage {
+    /// What it computes now.
+    Stage(String),
     /// The fraction done.
     Progress(f64),
-    /// Ready (or failed).
-    Done(Result<MaterialSurface, String>),
+    /// Ready (or failed), with the force over the hidden lump with it and without, if one is.
+    Done(Result<(MaterialSurface, Option<[f64; 2]>), String>),
 }
 
 impl ViewerState {
@@ -31,7 +37,13 @@ impl ViewerState {
             self.compliance_stale = true;
             return;
         }
-        let material = self.shown.material.clone();
+        let material = self.shown.felt_material();
+        // Find the lump: what the probe can feel of it, pressed over its centre.
+        let over = self.shown.exercise.as_ref().map(|e| {
+            let c = e.lump.inclusion.centre;
+            let radius = self.settings.probe_radius_mm * 1e-3;
+            ([c[0], c[1], CUBE_SIDE_M + radius - FELT_DEPTH_M], radius)
+        });
         let wake = Arc::clone(&self.wake);
         self.shown.contact_status = Some("probe contact: the material's surface compliance is loading".into());
         let started = self.compliance.start(
@@ -40,19 +52,39 @@ impl ViewerState {
             move |ctx| {
                 let dir = crate::io::cache_dir();
                 // Stopped within a batch when the viewer closes or the material changes.
-                let r = MaterialSurface::load_or_compute(&material, dir.as_deref(), &mut |event| match event {
-                    crate::io::cache::CacheEvent::Progress(f) => {
+                let r = MaterialSurface::with_background(&material, dir.as_deref(), &mut |event| match event {
+                    CacheEvent::Progress(f) => {
                         ctx.send(ComplianceMessage::Progress(f));
                         !ctx.cancelled()
                     }
                     // A cache file refused, or the answer not kept: said where the viewer was started.
-                    crate::io::cache::CacheEvent::Warning(line) => {
+                    CacheEvent::Warning(line) => {
                         eprintln!("{line}");
                         true
                     }
-                    crate::io::cache::CacheEvent::Computing { .. } | crate::io::cache::CacheEvent::Part(_) => true,
+                    CacheEvent::Computing { .. } => {
+                        ctx.send(ComplianceMessage::Stage("the material's surface compliance".into()));
+                        true
+                    }
+                    CacheEvent::Part(what) => {
+                        ctx.send(ComplianceMessage::Stage(what.into()));
+                        true
+                    }
                 });
-                ctx.send(ComplianceMessage::Done(r.map_err(|e| format!("{e:#}"))));
+                let r = r.map_err(|e| format!("{e:#}")).and_then(|(background, surface)| {
+                    let felt = match over {
+                        Some((centre, radius)) => {
+                            let mut scratch = ContactScratch::default();
+                            let mut press = |c: &SurfaceCompliance| {
+                                c.press(centre, radius, &mut scratch).map(|f| f[2]).map_err(|e| e.to_string())
+                            };
+                            Some([press(&surface.compliance)?, press(&background)?])
+                        }
+                        None => None,
+                    };
+                    Ok((surface, felt))
+                });
+                ctx.send(ComplianceMessage::Done(r));
             },
         );
         if let Err(e) = started {
@@ -64,21 +96,26 @@ impl ViewerState {
     pub(super) fn poll_compliance(&mut self, send: &mut dyn FnMut(Command)) {
         let shown = &mut self.shown;
         let stale = self.compliance_stale;
+        let stage = &mut self.compliance_stage;
         let ended = self.compliance.poll(|m| match m {
             // Another material's: dropped.
             _ if stale => {}
+            ComplianceMessage::Stage(what) => *stage = what,
             ComplianceMessage::Progress(f) => {
-                shown.contact_status = Some(format!(
-                    "probe contact: computing the material's surface compliance, {:.0} % (the model's nodes until then)",
-                    100.0 * f
-                ));
+                shown.contact_status =
+                    Some(format!("probe contact: computing {stage}, {:.0} % (meanwhile as before)", 100.0 * f));
             }
-            ComplianceMessage::Done(Ok(c)) => {
+            ComplianceMessage::Done(Ok((c, felt))) => {
                 shown.contact_status = None;
                 send(Command::SetSurfaceProbe(Some(c)));
+                if let Some(e) = shown.exercise.as_mut().filter(|e| e.ready.is_none()) {
+                    e.ready = Some(std::time::Instant::now());
+                    e.felt = felt;
+                }
             }
             ComplianceMessage::Done(Err(e)) => {
-                shown.contact_status = Some(format!("probe contact: the model's nodes (surface compliance failed: {e})"));
+                shown.contact_status =
+                    Some(format!("probe contact: the model's nodes (surface compliance failed: {e})"));
             }
         });
         if let Some(super::super::worker::State::Stopped(why)) = &ended {

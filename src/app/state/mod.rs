@@ -9,8 +9,9 @@
 //! it from a recipe.
 //!
 //! `jobs`: the background jobs a request starts; `model`: another object, material file or
-//! resolution; `record`: the recording as a script.
+//! resolution; `record`: the recording as a script; `exercise`: find the lump.
 
+mod exercise;
 mod jobs;
 mod model;
 mod record;
@@ -71,6 +72,12 @@ pub enum Request {
     ProbeStarted,
     /// A probe force sample (depth mm, force N) for the force-depth plot.
     ForceSample([f64; 2]),
+    /// Find the lump: hide a new one ([`ViewSettings::lump_ranges`], [`ViewSettings::lump_seed`]).
+    HideLump,
+    /// Mark the hidden lump where the probe last pressed, and reveal it.
+    MarkLump,
+    /// End the exercise: the lump goes.
+    EndExercise,
 }
 
 /// The viewer's state.
@@ -90,6 +97,8 @@ pub struct ViewerState {
     /// The material changed while a surface compliance was computed: its result is dropped and
     /// the new material's started when it ends.
     compliance_stale: bool,
+    /// What the surface compliance job computes now.
+    compliance_stage: String,
     wake: Arc<dyn Fn() + Send + Sync>,
 }
 
@@ -148,6 +157,8 @@ impl ViewerState {
                 tool: Tool::None,
                 last_probe: None,
                 fem_probe: None,
+                inclusions: Vec::new(),
+                exercise: None,
             },
             grid,
             fem: Slot::default(),
@@ -157,6 +168,7 @@ impl ViewerState {
             fem_probe: Slot::default(),
             compliance: Slot::default(),
             compliance_stale: false,
+            compliance_stage: String::new(),
             wake: Arc::new(wake),
         };
         let mut state = state;
@@ -263,6 +275,13 @@ impl ViewerState {
                 Some(last) if (last[0] - s[0]).abs() <= 0.05 => last[1] = s[1],
                 _ => self.shown.force_depth.push(s),
             },
+            Request::HideLump => self.hide_lump(),
+            Request::MarkLump => self.mark_lump(),
+            Request::EndExercise => {
+                if self.shown.exercise.take().is_some() {
+                    self.start_compliance();
+                }
+            }
         }
     }
 

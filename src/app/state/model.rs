@@ -13,7 +13,7 @@ impl ViewerState {
         let (material, file) = match self.settings.object {
             Source::File => {
                 let path = std::path::PathBuf::from(self.settings.material_path.trim());
-                match Material::from_file(&path).and_then(|m| m.require_homogeneous("the viewer").map(|()| m)) {
+                match Material::from_file(&path) {
                     Ok(m) => (m, Some(path)),
                     Err(e) => {
                         self.shown.note = Some(format!("{e:#}"));
@@ -23,6 +23,9 @@ impl ViewerState {
             }
             Source::Object(object) => (object.material(), None),
         };
+        // The model steps the background; the probe feels the inclusions too.
+        let inclusions = material.inclusions.clone();
+        let material = material.background();
         let params = crate::sim::shipped::msm_params_at(&material, topology, &self.grid).unwrap_or_else(|_| {
             // No shipped calibration: start from the material-derived scale and suggest calibrating.
             let space = crate::calibrate::GeneSpace::new(&material, &self.grid, topology);
@@ -33,8 +36,10 @@ impl ViewerState {
             ));
             space.params(&mid)
         });
+        self.shown.inclusions = inclusions;
         self.shown.material = material;
         self.shown.material_file = file;
+        self.shown.exercise = None;
         self.shown.params = params;
         self.shown.case_active = None;
         self.shown.fem_answer = None;

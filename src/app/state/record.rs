@@ -41,6 +41,11 @@ impl ViewerState {
                 )),
             }
         }
+        if self.shown.exercise.is_some() {
+            notes.push(
+                "the lump hidden to find is not in the script: the replay presses the material without it".into(),
+            );
+        }
         Ok(Script {
             object,
             material,

@@ -219,11 +219,21 @@ impl MaterialSurface {
         dir: Option<&Path>,
         report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
     ) -> anyhow::Result<Self> {
-        let compliance = load_or_compute(material, dir, report)?;
+        Ok(Self::with_background(material, dir, report)?.1)
+    }
+
+    /// [`MaterialSurface::load_or_compute`] with the compliance of the material's background
+    /// beside it (the same where it has no inclusions, [`with_background`]).
+    pub fn with_background(
+        material: &Material,
+        dir: Option<&Path>,
+        report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
+    ) -> anyhow::Result<(Arc<SurfaceCompliance>, Self)> {
+        let (background, compliance) = with_background(material, dir, report)?;
         // The background's modes: the inclusions change the slow modes little, and the force
         // held still is the compliance's, inclusions and all.
         let modes = Arc::new(ModalBasis::of_material(&material.background()).map_err(anyhow::Error::msg)?);
-        Ok(Self { compliance, modes })
+        Ok((background, Self { compliance, modes }))
     }
 }
 

@@ -80,6 +80,7 @@ pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[Model], axis: Axis) -
     let (title, y_desc) = axis.describe();
     let mut objects: Vec<Object> = points.iter().map(|p| p.object).collect();
     objects.dedup();
+    crate::study::font::register().map_err(anyhow::Error::msg)?;
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (620 * objects.len().max(1) as u32, 520)).into_drawing_area();
@@ -158,6 +159,7 @@ pub fn speed_accuracy_svg(points: &[ChartPoint], models: &[Model], axis: Axis) -
 
 /// Measured critical dt against `2 / omega_max`, log-log, with the line of equality.
 pub fn stability_svg(points: &[StabilityPoint]) -> anyhow::Result<String> {
+    crate::study::font::register().map_err(anyhow::Error::msg)?;
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (640, 520)).into_drawing_area();

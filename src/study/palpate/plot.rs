@@ -13,18 +13,9 @@ const SIZE: (u32, u32) = (900, 760);
 /// The colour bar's width, pixels.
 const BAR: u32 = 150;
 
-/// Registers the font the picture's text is drawn in (once).
-fn font() -> Result<(), String> {
-    static REGISTERED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| {
-        plotters::style::register_font("sans-serif", FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT).is_ok()
-    });
-    if ok { Ok(()) } else { Err("the map's font cannot be read".into()) }
-}
-
 /// The map drawn as PNG bytes.
 pub fn png(map: &PalpationMap) -> Result<Vec<u8>, String> {
-    font()?;
+    crate::study::font::register()?;
     let (w, h) = SIZE;
     let mut rgb = vec![255u8; (3 * w * h) as usize];
     draw(map, &mut rgb).map_err(|e| format!("cannot draw the map: {e}"))?;

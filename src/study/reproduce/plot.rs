@@ -15,6 +15,7 @@ const COLOURS: [RGBColor; 4] =
 
 /// Renders panels side by side (one `(title, y label, series)` each) into an SVG string.
 pub fn line_panels(title: &str, x_label: &str, panels: &[(&str, &str, Vec<Series<'_>>)]) -> anyhow::Result<String> {
+    crate::study::font::register().map_err(anyhow::Error::msg)?;
     let mut svg = String::new();
     {
         let width = 520 * panels.len().max(1) as u32;
