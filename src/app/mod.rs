@@ -7,13 +7,14 @@
 //! - [`state`]: the window-free viewer state, which turns [`state::Request`]s into physics
 //!   commands and background jobs, over what [`settings`] holds; [`panel`]: the side panel, a
 //!   file per section; [`gestures`]: mouse gestures; [`overlay`]: colour scalar, legend and
-//!   lines, once per frame; [`stats`]: frame rate and tool latency; [`exercise`]: find the lump.
+//!   lines, once per frame; [`stats`]: frame rate and tool latency; [`exercise`]: find the lump; [`face_map`]: the palpation map's overlay.
 //! - Threads, all [`worker::Worker`]s: [`physics`] (steps the simulation), [`calibration_job`],
 //!   the chart of [`panel::study`], and the FEM answer of a load case. The UI thread only draws
 //!   and forwards input.
 
 pub mod calibration_job;
 pub mod exercise;
+pub mod face_map;
 pub mod gestures;
 pub mod overlay;
 pub mod panel;

@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 
 use glam::Vec3;
 
+use crate::app::face_map::FaceMap;
 use crate::mechanics::grid::Grid;
 use crate::render::gpu::LineVertex;
 use crate::render::mesh::SurfaceMesh;
@@ -22,6 +23,8 @@ pub struct Show {
     pub springs: bool,
     /// Node markers.
     pub nodes: bool,
+    /// With a palpation map: its contrast, not its force.
+    pub map_contrast: bool,
     /// Fixed-face outline.
     pub fixed: bool,
     /// The tool held: the probe sphere, or the dragged node's handle and force arrow.
@@ -43,6 +46,10 @@ pub struct Overlay {
     pub scalar: Vec<f32>,
     /// The legend's range text.
     pub range: String,
+    /// The legend's title.
+    pub title: &'static str,
+    /// The legend's labels at its top and bottom.
+    pub ends: [String; 2],
     edges: Vec<(usize, usize)>,
     rest: Vec<[f32; 3]>,
 }
@@ -54,6 +61,8 @@ impl Overlay {
             lines: Vec::with_capacity(2 * 6000),
             scalar: vec![0.0; grid.num_nodes()],
             range: String::with_capacity(64),
+            title: "",
+            ends: [String::with_capacity(16), String::with_capacity(16)],
             edges: lattice_edges(grid),
             rest: grid.positions().iter().map(|p| p.map(|c| c as f32)).collect(),
         }
@@ -64,18 +73,47 @@ impl Overlay {
         &self.rest
     }
 
-    /// Recomputes the scalar, its range text, the surface mesh and the lines for `positions`.
+    /// Recomputes the scalar, its range text, the surface mesh and the lines for `positions`;
+    /// with `map`, the scalar is the palpation map's force on the top face.
     pub fn update(
         &mut self,
         show: Show,
         positions: &[[f32; 3]],
         fixed: &[bool],
         fem: Option<&[[f64; 3]]>,
+        map: Option<&FaceMap>,
         mesh: &mut SurfaceMesh,
     ) {
         let mut max = None;
         self.range.clear();
+        self.ends.iter_mut().for_each(String::clear);
+        self.title = match show.colour {
+            ColourMode::Displacement => "displacement",
+            ColourMode::Error => "MSM-FEM error",
+            ColourMode::None => "",
+        };
+        self.ends[0].push_str("max");
+        self.ends[1].push('0');
         match (show.colour, fem) {
+            (_, _) if let Some(m) = map => {
+                let (values, [low, high]) =
+                    if show.map_contrast { (&m.contrast_per_node, m.contrast_range) } else { (&m.per_node, m.range) };
+                for (s, v) in self.scalar.iter_mut().zip(values) {
+                    *s = if v.is_finite() { (v - low) / (high - low).max(1e-6) } else { 0.0 };
+                }
+                max = Some(1.0);
+                self.ends.iter_mut().for_each(String::clear);
+                if show.map_contrast {
+                    self.title = "contrast: force over the force without lumps (top face map)";
+                    let _ = write!(self.ends[0], "{:+.1} %", 100.0 * high);
+                    let _ = write!(self.ends[1], "{:+.1} %", 100.0 * low);
+                } else {
+                    self.title = "probe force (top face map)";
+                    let _ = write!(self.ends[0], "{high:.2} N");
+                    let _ = write!(self.ends[1], "{low:.2} N");
+                }
+                self.range.push_str("pressed 4 mm, 21 x 21 points");
+            }
             (ColourMode::None, _) => self.scalar.fill(0.0),
             (ColourMode::Displacement, _) => {
                 for (s, (p, r)) in self.scalar.iter_mut().zip(positions.iter().zip(&self.rest)) {
@@ -185,7 +223,8 @@ pub fn error_vs_fem(pos: &[[f32; 3]], rest: &[[f32; 3]], fem: &[[f64; 3]]) -> (f
 }
 
 /// The colour legend at the right edge of the 3D view.
-pub fn legend(ui: &mut egui::Ui, rect: egui::Rect, mode: ColourMode, range: &str) {
+pub fn legend(ui: &mut egui::Ui, rect: egui::Rect, overlay: &Overlay) {
+    let (title, range) = (overlay.title, overlay.range.as_str());
     let painter = ui.painter_at(rect);
     let x0 = rect.right() - 40.0;
     let (top, bottom) = (rect.top() + 40.0, rect.top() + 240.0);
@@ -200,17 +239,12 @@ pub fn legend(ui: &mut egui::Ui, rect: egui::Rect, mode: ColourMode, range: &str
             c,
         );
     }
-    let title = match mode {
-        ColourMode::Displacement => "displacement",
-        ColourMode::Error => "MSM-FEM error",
-        ColourMode::None => "",
-    };
     let label = |pos: egui::Pos2, align: egui::Align2, text: &str, size: f32| {
         painter.text(pos, align, text, egui::FontId::proportional(size), egui::Color32::WHITE);
     };
     label(egui::pos2(x0 + 16.0, top - 22.0), egui::Align2::RIGHT_BOTTOM, title, 13.0);
-    label(egui::pos2(x0 - 6.0, top), egui::Align2::RIGHT_TOP, "max", 12.0);
-    label(egui::pos2(x0 - 6.0, bottom), egui::Align2::RIGHT_BOTTOM, "0", 12.0);
+    label(egui::pos2(x0 - 6.0, top), egui::Align2::RIGHT_TOP, &overlay.ends[0], 12.0);
+    label(egui::pos2(x0 - 6.0, bottom), egui::Align2::RIGHT_BOTTOM, &overlay.ends[1], 12.0);
     label(egui::pos2(x0 + 16.0, bottom + 6.0), egui::Align2::RIGHT_TOP, range, 12.0);
 }
 

@@ -76,6 +76,11 @@ pub struct ViewSettings {
     pub lump_ranges: crate::app::exercise::Ranges,
     /// The next hidden lump's seed.
     pub lump_seed: u64,
+    /// Colour the top face by the palpation map, once computed.
+    pub show_map: bool,
+    /// The map's colour is its contrast against the material without its inclusions, not its
+    /// force.
+    pub map_contrast: bool,
 }
 
 impl Default for ViewSettings {
@@ -105,6 +110,8 @@ impl Default for ViewSettings {
             recording: None,
             lump_ranges: crate::app::exercise::Ranges::default(),
             lump_seed: 1,
+            show_map: true,
+            map_contrast: false,
         }
     }
 }
@@ -157,6 +164,8 @@ pub struct Shown {
     pub inclusions: Vec<crate::mechanics::inclusion::Inclusion>,
     /// Find the lump, while under way (its lump hidden until marked).
     pub exercise: Option<crate::app::exercise::Exercise>,
+    /// The palpation map of the top face, once computed (or why not), for the felt material.
+    pub face_map: Option<Result<crate::app::face_map::FaceMap, String>>,
 }
 
 impl Shown {

@@ -204,8 +204,8 @@ impl App {
                     probe_along_view: settings.probe_along_view,
                 };
                 view_input(&response, ui.ctx(), &mut self.camera, &mut self.gesture, &scene, &mut self.requests);
-                if settings.colour != ColourMode::None {
-                    legend(ui, rect, settings.colour, &self.overlay.range);
+                if !self.overlay.title.is_empty() {
+                    legend(ui, rect, &self.overlay);
                 }
                 self.force_beside_the_probe(ui.painter(), rect);
             });
@@ -281,12 +281,15 @@ impl App {
             colour: s.colour,
             springs: s.show_springs,
             nodes: s.show_nodes,
+            map_contrast: s.map_contrast,
             fixed: s.show_fixed,
             tool: self.state.shown.tool,
             tool_force: self.latest.tool_force,
         };
         let fem = self.state.shown.fem_answer.as_deref();
-        self.overlay.update(show, &self.latest.positions, &self.latest.fixed, fem, &mut self.mesh);
+        let map =
+            self.state.shown.face_map.as_ref().and_then(|m| m.as_ref().ok()).filter(|_| self.state.settings.show_map);
+        self.overlay.update(show, &self.latest.positions, &self.latest.fixed, fem, map, &mut self.mesh);
         let Some(surface) = self.surface.as_mut() else { return Ok(()) };
         surface.egui_state.handle_platform_output(&surface.window, full.platform_output);
         self.repaint_after = full
@@ -300,7 +303,8 @@ impl App {
         let cube = CubeFrame {
             rect: self.view_rect,
             view_proj: &move |aspect| camera.view_proj(aspect),
-            colour_map: s.colour != ColourMode::None,
+            colour_map: s.colour != ColourMode::None
+                || (s.show_map && self.state.shown.face_map.as_ref().is_some_and(Result::is_ok)),
             mesh: &self.mesh,
             lines: &self.overlay.lines,
         };
@@ -474,7 +478,11 @@ pub fn run(options: super::ViewOptions) -> anyhow::Result<()> {
         // The smoke test's screenshot: the same scene through the offscreen path.
         let headless = crate::render::offscreen::Headless::new()?;
         let (w, h) = (960, 540);
-        let style = SurfaceStyle { colour_map: app.state.settings.colour != ColourMode::None, ..Default::default() };
+        let style = SurfaceStyle {
+            colour_map: app.state.settings.colour != ColourMode::None
+                || (app.state.settings.show_map && app.state.shown.face_map.as_ref().is_some_and(Result::is_ok)),
+            ..Default::default()
+        };
         let view_proj = app.camera.view_proj(w as f32 / h as f32);
         let rgba = headless.render((w, h), view_proj, style, &app.mesh, &app.overlay.lines)?;
         crate::io::write_atomic(&path, &crate::render::offscreen::encode_png(w, h, &rgba)?)?;

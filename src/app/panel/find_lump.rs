@@ -13,6 +13,7 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
             shown.inclusions.len()
         ));
     }
+    map_row(ui, settings, shown, requests);
     let Some(e) = &shown.exercise else {
         ui.label("A lump is hidden under the top face, drawn from these ranges:");
         let r = &mut settings.lump_ranges;
@@ -96,4 +97,45 @@ fn range(ui: &mut egui::Ui, label: &str, value: &mut [f64; 2], limits: [f64; 2],
         ui.label("to");
         ui.add(egui::DragValue::new(&mut value[1]).range(low..=limits[1]).speed(speed));
     });
+}
+
+/// The palpation map of the top face: compute it, show it or not, what it found.
+fn map_row(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, requests: &mut Vec<Request>) {
+    let hidden = shown.exercise.as_ref().is_some_and(|e| e.mark.is_none());
+    ui.horizontal_wrapped(|ui| {
+        let map = ui
+            .add_enabled(!hidden, egui::Button::new("Map the top face"))
+            .on_hover_text(
+                "The probe (its radius now) pressed 4 mm at 21 x 21 points of the top face: its force as the top \
+                 face's colours (tissue-sim palpate's map)",
+            )
+            .on_disabled_hover_text("it would show the hidden lump: mark it first");
+        if map.clicked() {
+            requests.push(Request::MapTopFace);
+        }
+        ui.checkbox(&mut settings.show_map, "show the map");
+        ui.checkbox(&mut settings.map_contrast, "as contrast");
+    });
+    match &shown.face_map {
+        Some(Ok(m)) => {
+            let [low, high] = m.range;
+            let mut line = format!("map: {low:.2} to {high:.2} N");
+            if let Some((peak, at)) = m.map.peak().filter(|_| !m.map.inclusions.is_empty()) {
+                line.push_str(&format!(
+                    "; largest contrast against the tissue without its lumps {:+.1} % at ({:.0}, {:.0}) mm, above 7 % \
+                     at {} of {} points",
+                    100.0 * peak,
+                    at[0] * 1e3,
+                    at[1] * 1e3,
+                    m.map.felt(),
+                    m.map.points.len()
+                ));
+            }
+            ui.label(line);
+        }
+        Some(Err(why)) => {
+            ui.label(format!("map: {why}"));
+        }
+        None => {}
+    }
 }

@@ -9,6 +9,7 @@ use crate::io::cache::CacheEvent;
 use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::sim::material_surface::MaterialSurface;
 use crate::sim::material_surface::compliance::{ContactScratch, SurfaceCompliance};
+use crate::study::palpate::{Face, Palpation, PalpationMap};
 
 use super::super::calibration_job;
 use super::{ProbeComparison, ViewerState};
@@ -23,14 +24,18 @@ pub(super) enum ComplianceMessage {
     Stage(String),
     /// The fraction done.
     Progress(f64),
-    /// Ready (or failed), with the force over the hidden lump with it and without, if one is.
-    Done(Result<(MaterialSurface, Option<[f64; 2]>), String>),
+    /// Ready (or failed): the material's, its background's compliance, and the force over the
+    /// hidden lump with it and without, if one is.
+    Done(Result<(MaterialSurface, Arc<SurfaceCompliance>, Option<[f64; 2]>), String>),
 }
 
 impl ViewerState {
     /// Loads (or computes, about a minute, and keeps) the material's surface compliance in the
     /// background; the probe uses the model's surface nodes until it is ready.
     pub(super) fn start_compliance(&mut self) {
+        // A map or a compliance of the material before: gone.
+        self.compliances = None;
+        self.shown.face_map = None;
         if self.compliance.busy() {
             // Another material's: stopped within a batch, then this one starts.
             self.compliance.cancel();
@@ -82,7 +87,7 @@ impl ViewerState {
                         }
                         None => None,
                     };
-                    Ok((surface, felt))
+                    Ok((surface, background, felt))
                 });
                 ctx.send(ComplianceMessage::Done(r));
             },
@@ -97,6 +102,7 @@ impl ViewerState {
         let shown = &mut self.shown;
         let stale = self.compliance_stale;
         let stage = &mut self.compliance_stage;
+        let compliances = &mut self.compliances;
         let ended = self.compliance.poll(|m| match m {
             // Another material's: dropped.
             _ if stale => {}
@@ -105,8 +111,9 @@ impl ViewerState {
                 shown.contact_status =
                     Some(format!("probe contact: computing {stage}, {:.0} % (meanwhile as before)", 100.0 * f));
             }
-            ComplianceMessage::Done(Ok((c, felt))) => {
+            ComplianceMessage::Done(Ok((c, background, felt))) => {
                 shown.contact_status = None;
+                *compliances = Some([Arc::clone(&c.compliance), background]);
                 send(Command::SetSurfaceProbe(Some(c)));
                 if let Some(e) = shown.exercise.as_mut().filter(|e| e.ready.is_none()) {
                     e.ready = Some(std::time::Instant::now());
@@ -227,5 +234,48 @@ impl ViewerState {
             }
             Err(e) => self.shown.note = Some(format!("cannot start the calibration: {e}")),
         }
+    }
+}
+
+impl ViewerState {
+    /// The palpation map of the top face with the probe's radius, in the background (about two
+    /// seconds: 2 x 441 presses), once the surface compliance is loaded.
+    pub(super) fn start_map(&mut self) {
+        let Some([felt, background]) = self.compliances.clone() else {
+            self.shown.face_map = Some(Err("the surface compliance is still loading".into()));
+            return;
+        };
+        let material = self.shown.felt_material();
+        let palpation = Palpation {
+            face: Face::parse("+z").unwrap_or(Face { axis: 2, high: true }),
+            radius: self.settings.probe_radius_mm * 1e-3,
+            depth: crate::app::face_map::DEPTH_M,
+            grid: crate::app::face_map::GRID,
+        };
+        let wake = Arc::clone(&self.wake);
+        let started = self.map.start(
+            "palpation map",
+            move || wake(),
+            move |ctx| {
+                let r = palpation.check().and_then(|()| {
+                    let forces = palpation.forces(&felt, &mut || {})?;
+                    let plain = palpation.forces(&background, &mut || {})?;
+                    Ok(PalpationMap::new(&material, &palpation, forces, plain))
+                });
+                ctx.send(r);
+            },
+        );
+        if let Err(e) = started {
+            self.shown.face_map = Some(Err(e.to_string()));
+        }
+    }
+
+    /// Takes the palpation map when it is ready.
+    pub(super) fn poll_map(&mut self) {
+        let grid = self.grid;
+        let shown = &mut self.shown;
+        self.map.poll(|r: Result<PalpationMap, String>| {
+            shown.face_map = Some(r.map(|m| crate::app::face_map::FaceMap::new(m, &grid)));
+        });
     }
 }

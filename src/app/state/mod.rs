@@ -27,7 +27,9 @@ use crate::mechanics::fem::FemModel;
 use crate::mechanics::grid::Grid;
 use crate::mechanics::material::Material;
 use crate::mechanics::msm::{MsmParams, Topology};
+use crate::sim::material_surface::compliance::SurfaceCompliance;
 use crate::sim::{Integrator, Model, Tool};
+use crate::study::palpate::PalpationMap;
 
 /// What the user asked for.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,6 +80,8 @@ pub enum Request {
     MarkLump,
     /// End the exercise: the lump goes.
     EndExercise,
+    /// The palpation map of the top face, computed in the background.
+    MapTopFace,
 }
 
 /// The viewer's state.
@@ -99,6 +103,9 @@ pub struct ViewerState {
     compliance_stale: bool,
     /// What the surface compliance job computes now.
     compliance_stage: String,
+    /// The felt material's surface compliance and its background's, once loaded.
+    compliances: Option<[Arc<SurfaceCompliance>; 2]>,
+    map: Slot<Result<PalpationMap, String>>,
     wake: Arc<dyn Fn() + Send + Sync>,
 }
 
@@ -159,6 +166,7 @@ impl ViewerState {
                 fem_probe: None,
                 inclusions: Vec::new(),
                 exercise: None,
+                face_map: None,
             },
             grid,
             fem: Slot::default(),
@@ -169,6 +177,8 @@ impl ViewerState {
             compliance: Slot::default(),
             compliance_stale: false,
             compliance_stage: String::new(),
+            compliances: None,
+            map: Slot::default(),
             wake: Arc::new(wake),
         };
         let mut state = state;
@@ -282,6 +292,7 @@ impl ViewerState {
                     self.start_compliance();
                 }
             }
+            Request::MapTopFace => self.start_map(),
         }
     }
 
@@ -319,6 +330,7 @@ impl ViewerState {
     /// through `send`.
     pub fn poll(&mut self, send: &mut dyn FnMut(Command)) {
         self.poll_compliance(send);
+        self.poll_map();
         let shown = &mut self.shown;
         let ended = self.calibration.poll(|msg| match msg {
             Progress::Generation(s) => shown.history.push(s),

@@ -76,6 +76,13 @@ pub enum ComplianceError {
     /// The material has inclusions, which the surface compliance does not model yet.
     #[error(transparent)]
     Material(#[from] crate::mechanics::material::MaterialError),
+    /// The inclusions reach more surface nodes than their correction may hold.
+    #[error(
+        "the inclusions reach {0} nodes of the surface (within 20 mm of them), above the bound of {max}: keep them \
+         closer together",
+        max = lump::MAX_NODES
+    )]
+    TooSpread(usize),
     /// The computation was stopped by its caller.
     #[error("the surface compliance was cancelled")]
     Cancelled,

@@ -27,6 +27,8 @@ pub const SPACING_M: f64 = 0.0025;
 pub const REACH_M: f64 = 0.02;
 /// Growth of the element size beyond.
 const GROWTH: f64 = 1.45;
+/// Most surface nodes the correction holds (3 x 3 blocks per pair: 290 MB).
+pub const MAX_NODES: usize = 2800;
 /// Unit loads solved in one batch.
 const BATCH: usize = 128;
 
@@ -61,6 +63,9 @@ impl LumpCorrection {
                 *row = read.len() as u32;
                 read.push(mesh.corners(x));
             }
+        }
+        if read.len() > MAX_NODES {
+            return Err(ComplianceError::TooSpread(read.len()));
         }
         let (nodes, change) = inclusion_change(&mesh, material);
         let mut background = material.clone();
