@@ -32,7 +32,9 @@ impl Default for Ranges {
 }
 
 /// The most a range reaches: radius and depth, millimetres; contrast.
-pub const LIMITS: Ranges = Ranges { radius_mm: [2.0, 15.0], depth_mm: [2.0, 30.0], contrast: [0.2, 20.0] };
+/// (The surface compliance's correction reaches [`REACH_M`](crate::sim::material_surface::compliance::lump::REACH_M)
+/// beyond a lump: a lump deeper than that under the top face would not be felt at all.)
+pub const LIMITS: Ranges = Ranges { radius_mm: [2.0, 15.0], depth_mm: [2.0, 20.0], contrast: [0.2, 20.0] };
 
 /// A lump hidden under the top face.
 #[derive(Debug, Clone, PartialEq)]
@@ -49,8 +51,9 @@ pub struct HiddenLump {
 
 /// Draws a lump in `ranges` under `background`'s top face with `seed` (the same seed, the same
 /// lump): its radius, depth and contrast uniform in their ranges, its centre uniform over the face
-/// at least [`SIDE_MARGIN_M`] from the side faces.
-pub fn hide(background: &Material, ranges: &Ranges, seed: u64) -> Result<HiddenLump, String> {
+/// where the lump keeps [`SIDE_MARGIN_M`] from the side faces and its distance from each of
+/// `others` (drawn again where it would touch one).
+pub fn hide(background: &Material, others: &[Inclusion], ranges: &Ranges, seed: u64) -> Result<HiddenLump, String> {
     let pairs = [
         ("radius", ranges.radius_mm, LIMITS.radius_mm, "mm"),
         ("depth", ranges.depth_mm, LIMITS.depth_mm, "mm"),
@@ -69,7 +72,13 @@ pub fn hide(background: &Material, ranges: &Ranges, seed: u64) -> Result<HiddenL
     let depth = draw(ranges.depth_mm) * 1e-3;
     let contrast = draw(ranges.contrast);
     let room = [SIDE_MARGIN_M + radius, CUBE_SIDE_M - SIDE_MARGIN_M - radius];
-    let centre = [draw(room), draw(room), CUBE_SIDE_M - depth - radius];
+    let apart = |c: &[f64; 3]| {
+        others.iter().all(|o| (0..3).map(|a| (c[a] - o.centre[a]).powi(2)).sum::<f64>().sqrt() > o.radius + radius)
+    };
+    let centre = (0..100)
+        .map(|_| [draw(room), draw(room), CUBE_SIDE_M - depth - radius])
+        .find(apart)
+        .ok_or("no place under the top face keeps a hidden lump clear of the material's own inclusions")?;
     let inclusion = Inclusion { centre, radius, stiffness: background.stiffness * contrast };
     Ok(HiddenLump { inclusion, contrast, depth_m: depth, seed })
 }
@@ -114,8 +123,8 @@ mod tests {
         let a = Material::object_a();
         let ranges = Ranges::default();
         for seed in 0..50 {
-            let lump = hide(&a, &ranges, seed).expect("a lump");
-            assert_eq!(hide(&a, &ranges, seed), Ok(lump.clone()));
+            let lump = hide(&a, &[], &ranges, seed).expect("a lump");
+            assert_eq!(hide(&a, &[], &ranges, seed), Ok(lump.clone()));
             let i = &lump.inclusion;
             assert!((0.005..=0.010).contains(&i.radius) && (0.005..=0.020).contains(&lump.depth_m), "{lump:?}");
             assert!((2.0..=10.0).contains(&lump.contrast));
@@ -125,16 +134,21 @@ mod tests {
             with.inclusions.push(i.clone());
             assert!(with.stiffness_at(i.centre) != &a.stiffness);
         }
-        assert!(hide(&a, &ranges, 1) != hide(&a, &ranges, 2));
+        assert!(hide(&a, &[], &ranges, 1) != hide(&a, &[], &ranges, 2));
+        // Clear of the material's own inclusions: a lump where seed 3 would put one is avoided.
+        let there = hide(&a, &[], &ranges, 3).expect("a lump").inclusion;
+        let other = hide(&a, std::slice::from_ref(&there), &ranges, 3).expect("a lump elsewhere").inclusion;
+        let apart = (0..3).map(|k| (other.centre[k] - there.centre[k]).powi(2)).sum::<f64>().sqrt();
+        assert!(apart > other.radius + there.radius, "{apart}");
         let bad = Ranges { radius_mm: [10.0, 5.0], ..ranges };
-        assert!(hide(&a, &bad, 1).unwrap_err().contains("radius"));
+        assert!(hide(&a, &[], &bad, 1).unwrap_err().contains("radius"));
         let bad = Ranges { contrast: [2.0, f64::NAN], ..ranges };
-        assert!(hide(&a, &bad, 1).unwrap_err().contains("contrast"));
+        assert!(hide(&a, &[], &bad, 1).unwrap_err().contains("contrast"));
     }
 
     #[test]
     fn the_mark_is_scored_by_its_distance_along_the_face() {
-        let lump = hide(&Material::object_a(), &Ranges::default(), 7).expect("a lump");
+        let lump = hide(&Material::object_a(), &[], &Ranges::default(), 7).expect("a lump");
         let c = lump.inclusion.centre;
         let mut e = Exercise { lump, ready: None, mark: None, felt: Some([10.5, 10.0]) };
         assert_eq!(e.miss(), None);

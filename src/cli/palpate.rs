@@ -85,7 +85,7 @@ pub fn run(args: PalpateArgs) -> anyhow::Result<()> {
     if let Some((peak, at)) = map.peak().filter(|_| !material.inclusions.is_empty()) {
         say(&format!(
             "contrast against the material without its inclusions: largest {:+.2} % at ({:.1}, {:.1}, {:.1}) mm; \
-             above {:.0} % (felt) at {} of {presses} points",
+             beyond {:.0} % either way (felt) at {} of {presses} points",
             100.0 * peak,
             at[0] * 1e3,
             at[1] * 1e3,

@@ -122,7 +122,7 @@ fn map_row(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reques
             let mut line = format!("map: {low:.2} to {high:.2} N");
             if let Some((peak, at)) = m.map.peak().filter(|_| !m.map.inclusions.is_empty()) {
                 line.push_str(&format!(
-                    "; largest contrast against the tissue without its lumps {:+.1} % at ({:.0}, {:.0}) mm, above 7 % \
+                    "; largest contrast against the tissue without its lumps {:+.1} % at ({:.0}, {:.0}) mm, beyond 7 % \
                      at {} of {} points",
                     100.0 * peak,
                     at[0] * 1e3,

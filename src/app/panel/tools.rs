@@ -151,7 +151,7 @@ fn contact_line(shown: &Shown, ctx: &PanelContext<'_>) -> String {
     match (&shown.contact_status, ctx.published.surface_probe) {
         (Some(status), _) => status.clone(),
         (None, true) => {
-            let lumps = shown.felt_material().inclusions.len();
+            let lumps = shown.inclusions.len() + usize::from(shown.exercise.is_some());
             let felt = if lumps > 0 { format!("; its {lumps} inclusion(s) felt within 3 %") } else { String::new() };
             format!(
                 "probe contact: the material's surface compliance (every free face, 2 mm grid, 1 mm across the edges; \

@@ -10,7 +10,7 @@ impl ViewerState {
     /// Hides a new lump under the top face, drawn from the settings' ranges and seed (the next
     /// seed is one more).
     pub(super) fn hide_lump(&mut self) {
-        match hide(&self.shown.material, &self.settings.lump_ranges, self.settings.lump_seed) {
+        match hide(&self.shown.material, &self.shown.inclusions, &self.settings.lump_ranges, self.settings.lump_seed) {
             Ok(lump) => {
                 self.shown.exercise = Some(Exercise { lump, ready: None, mark: None, felt: None });
                 self.settings.lump_seed = self.settings.lump_seed.wrapping_add(1);

@@ -35,7 +35,7 @@ impl ViewerState {
     pub(super) fn start_compliance(&mut self) {
         // A map or a compliance of the material before: gone.
         self.compliances = None;
-        self.shown.face_map = None;
+        self.forget_map();
         if self.compliance.busy() {
             // Another material's: stopped within a batch, then this one starts.
             self.compliance.cancel();
@@ -123,6 +123,9 @@ impl ViewerState {
             ComplianceMessage::Done(Err(e)) => {
                 shown.contact_status =
                     Some(format!("probe contact: the model's nodes (surface compliance failed: {e})"));
+                if shown.exercise.take_if(|e| e.ready.is_none()).is_some() {
+                    shown.note = Some(format!("the hidden lump cannot be felt, so it is gone: {e}"));
+                }
             }
         });
         if let Some(super::super::worker::State::Stopped(why)) = &ended {
@@ -253,6 +256,7 @@ impl ViewerState {
             grid: crate::app::face_map::GRID,
         };
         let wake = Arc::clone(&self.wake);
+        let generation = self.map_generation;
         let started = self.map.start(
             "palpation map",
             move || wake(),
@@ -262,7 +266,7 @@ impl ViewerState {
                     let plain = palpation.forces(&background, &mut || {})?;
                     Ok(PalpationMap::new(&material, &palpation, forces, plain))
                 });
-                ctx.send(r);
+                ctx.send((generation, r));
             },
         );
         if let Err(e) = started {
@@ -270,12 +274,20 @@ impl ViewerState {
         }
     }
 
-    /// Takes the palpation map when it is ready.
+    /// Takes the palpation map when it is ready (one of another material or grid is dropped).
     pub(super) fn poll_map(&mut self) {
-        let grid = self.grid;
+        let (grid, current) = (self.grid, self.map_generation);
         let shown = &mut self.shown;
-        self.map.poll(|r: Result<PalpationMap, String>| {
-            shown.face_map = Some(r.map(|m| crate::app::face_map::FaceMap::new(m, &grid)));
+        self.map.poll(|(generation, r): (u64, Result<PalpationMap, String>)| {
+            if generation == current {
+                shown.face_map = Some(r.map(|m| crate::app::face_map::FaceMap::new(m, &grid)));
+            }
         });
+    }
+
+    /// The map shown, and any being computed, are of another material or grid.
+    pub(super) fn forget_map(&mut self) {
+        self.shown.face_map = None;
+        self.map_generation += 1;
     }
 }

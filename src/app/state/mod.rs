@@ -105,7 +105,9 @@ pub struct ViewerState {
     compliance_stage: String,
     /// The felt material's surface compliance and its background's, once loaded.
     compliances: Option<[Arc<SurfaceCompliance>; 2]>,
-    map: Slot<Result<PalpationMap, String>>,
+    map: Slot<(u64, Result<PalpationMap, String>)>,
+    /// Counts the materials and grids a map may be of: a map of an earlier one is dropped.
+    map_generation: u64,
     wake: Arc<dyn Fn() + Send + Sync>,
 }
 
@@ -179,6 +181,7 @@ impl ViewerState {
             compliance_stage: String::new(),
             compliances: None,
             map: Slot::default(),
+            map_generation: 0,
             wake: Arc::new(wake),
         };
         let mut state = state;

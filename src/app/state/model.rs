@@ -72,6 +72,7 @@ impl ViewerState {
             }
         }
         self.grid = grid;
+        self.forget_map();
         self.shown.case_active = None;
         self.shown.fem_answer = None;
         self.shown.fem_probe = None;

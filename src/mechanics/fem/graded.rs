@@ -136,6 +136,15 @@ impl GradedMesh {
         })
     }
 
+    /// Element `[i, j, k]` (its lowest node's indices): its lowest corner and sides, metres, and
+    /// its nodes in the element's order.
+    pub fn element(&self, ijk: [usize; 3]) -> ([f64; 3], [f64; 3], [usize; 8]) {
+        let lo = std::array::from_fn(|a| self.axes[a][ijk[a]]);
+        let sides = std::array::from_fn(|a| self.axes[a][ijk[a] + 1] - self.axes[a][ijk[a]]);
+        let nodes = super::element::NODE_SIDES.map(|o| self.node(std::array::from_fn(|a| ijk[a] + o[a])));
+        (lo, sides, nodes)
+    }
+
     /// Rest position of a node, metres.
     pub fn position(&self, node: usize) -> [f64; 3] {
         let ijk = self.ijk(node);
@@ -182,17 +191,12 @@ pub fn inclusion_change(mesh: &GradedMesh, material: &Material) -> (Vec<usize>, 
     for k in 0..nz - 1 {
         for j in 0..ny - 1 {
             for i in 0..nx - 1 {
-                let sides = [(0, i), (1, j), (2, k)].map(|(a, c)| mesh.axes[a][c + 1] - mesh.axes[a][c]);
-                let lo = [(0, i), (1, j), (2, k)].map(|(a, c)| mesh.axes[a][c]);
+                let (lo, sides, nodes) = mesh.element([i, j, k]);
                 let ke = match inside(material, lo, sides) {
                     Some(None) => continue,
                     Some(Some(w)) => hex8_box_stiffness(&material.inclusions[w].stiffness, sides),
                     None => hex8_box_stiffness_varying(|x| material.stiffness_at(x), lo, sides, SUB_CELLS),
                 };
-                let nodes = super::element::NODE_SIGNS.map(|s| {
-                    let o = s.map(|v| usize::from(v > 0.0));
-                    mesh.node([i + o[0], j + o[1], k + o[2]])
-                });
                 changed.push((nodes, ke - hex8_box_stiffness(&material.stiffness, sides)));
             }
         }
@@ -244,8 +248,7 @@ impl GradedFem {
         for k in 0..nz - 1 {
             for j in 0..ny - 1 {
                 for i in 0..nx - 1 {
-                    let sides = [(0, i), (1, j), (2, k)].map(|(a, c)| mesh.axes[a][c + 1] - mesh.axes[a][c]);
-                    let lo = [(0, i), (1, j), (2, k)].map(|(a, c)| mesh.axes[a][c]);
+                    let (lo, sides, nodes) = mesh.element([i, j, k]);
                     let cut;
                     let ke = match inside(material, lo, sides) {
                         Some(which) => matrices.entry((sides.map(f64::to_bits), which)).or_insert_with(|| {
@@ -257,10 +260,6 @@ impl GradedFem {
                             &cut
                         }
                     };
-                    let nodes = super::element::NODE_SIGNS.map(|s| {
-                        let o = s.map(|v| usize::from(v > 0.0));
-                        mesh.node([i + o[0], j + o[1], k + o[2]])
-                    });
                     let dof = |l: usize| 3 * nodes[l / 3] + l % 3;
                     for a in 0..24 {
                         for b in 0..=a {

@@ -49,8 +49,9 @@ pub struct SurfaceCompliance {
     lattice: Lattice,
     /// Per family, per solved column node, per target, per force component `b`, per displacement
     /// component `a`: metres per newton (a target's 3 x 3 block in one place: a contact reads
-    /// blocks of many columns at a few targets).
-    columns: Vec<f32>,
+    /// blocks of many columns at a few targets); shared by a material's compliance with its
+    /// background's.
+    columns: std::sync::Arc<[f32]>,
     /// What the material's inclusions change, near them (none for a homogeneous material).
     lump: Option<LumpCorrection>,
 }
@@ -94,7 +95,7 @@ impl SurfaceCompliance {
     #[cfg(test)]
     pub(crate) fn uniform(divisions: usize, value: f32) -> Self {
         let lattice = Lattice::new(divisions);
-        Self { columns: vec![value; lattice.values], lattice, lump: None }
+        Self { columns: vec![value; lattice.values].into(), lattice, lump: None }
     }
 
     /// Lattice spacing (away from the edges), metres.
@@ -185,7 +186,7 @@ impl SurfaceCompliance {
                 }
             }
         }
-        Ok(Self { lattice, columns, lump: None })
+        Ok(Self { lattice, columns: columns.into(), lump: None })
     }
 
     /// Rest position of surface node `q`, metres.

@@ -207,14 +207,15 @@ impl PalpationMap {
         }
     }
 
-    /// The largest contrast, and where.
+    /// The largest contrast either way, and where.
     pub fn peak(&self) -> Option<(f64, [f64; 3])> {
-        self.contrast.iter().zip(&self.points).map(|(&c, &p)| (c, p)).max_by(|a, b| a.0.total_cmp(&b.0))
+        self.contrast.iter().zip(&self.points).map(|(&c, &p)| (c, p)).max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()))
     }
 
-    /// Points where the contrast passes [`FELT_CONTRAST`].
+    /// Points where the contrast passes [`FELT_CONTRAST`] either way (a lump stiffer or softer
+    /// than the tissue).
     pub fn felt(&self) -> usize {
-        self.contrast.iter().filter(|&&c| c > FELT_CONTRAST).count()
+        self.contrast.iter().filter(|&&c| c.abs() > FELT_CONTRAST).count()
     }
 
     /// `map.csv`: one row per point.

@@ -64,10 +64,10 @@ fn draw<'a>(map: &PalpationMap, rgb: &'a mut [u8]) -> Result<(), Box<dyn std::er
         let (a, b) = across(p);
         Rectangle::new([(a - 0.5 * cell, b - 0.5 * cell), (a + 0.5 * cell, b + 0.5 * cell)], colour(f).filled())
     }))?;
-    let felt = map.points.iter().zip(&map.contrast).filter(|(_, c)| **c > map.felt_contrast);
+    let felt = map.points.iter().zip(&map.contrast).filter(|(_, c)| c.abs() > map.felt_contrast);
     chart
         .draw_series(felt.map(|(p, _)| Circle::new(across(p), 3, WHITE.filled())))?
-        .label(format!("contrast over the background above {:.0} %", 100.0 * map.felt_contrast))
+        .label(format!("contrast against the background beyond {:.0} %", 100.0 * map.felt_contrast))
         .legend(|(x, y)| {
             Circle::new((x + 8, y), 3, ShapeStyle { color: BLACK.into(), filled: false, stroke_width: 1 })
         });

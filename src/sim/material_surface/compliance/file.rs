@@ -102,7 +102,7 @@ impl SurfaceCompliance {
         }
         out.extend_from_slice(&(self.columns.len() as u64).to_le_bytes());
         debug_assert_eq!(out.len(), HEADER_BYTES);
-        for v in &self.columns {
+        for v in self.columns.iter() {
             out.extend_from_slice(&v.to_le_bytes());
         }
         let crc = crc32fast::hash(&out[CHECKED_FROM..]);
@@ -156,7 +156,7 @@ impl SurfaceCompliance {
         if columns.iter().any(|v| !v.is_finite()) {
             return Err(FileError::NotFinite);
         }
-        Ok(Self { lattice, columns, lump: None })
+        Ok(Self { lattice, columns: columns.into(), lump: None })
     }
 }
 
@@ -167,7 +167,7 @@ mod tests {
     /// A compliance of two divisions with made-up values (the file does not care).
     fn small() -> SurfaceCompliance {
         let lattice = super::super::lattice::Lattice::new(2);
-        let columns = (0..lattice.values).map(|i| 1e-6 * i as f32).collect();
+        let columns = (0..lattice.values).map(|i| 1e-6 * i as f32).collect::<Vec<f32>>().into();
         SurfaceCompliance { lattice, columns, lump: None }
     }
 

@@ -53,6 +53,9 @@ impl LumpCorrection {
         material: &Material,
         progress: &mut dyn FnMut(f64) -> bool,
     ) -> Result<Self, ComplianceError> {
+        if material.inclusions.is_empty() {
+            return Ok(Self { rows: vec![u32::MAX; lattice.len()], count: 0, values: Vec::new() });
+        }
         let (lo, hi, mesh) = window(material);
         // The surface nodes held: those within the fine box, each read from its box's corners.
         let mut rows = vec![u32::MAX; lattice.len()];
@@ -112,12 +115,18 @@ impl LumpCorrection {
         for k in 0..m {
             i_dg[(k, k)] += 1.0;
         }
-        let middle = i_dg.partial_piv_lu().solve(&d);
-        let w = &(&xq * &middle) * xq.transpose();
-        let count = read.len();
-        let values = blocks(&w, count);
+        let mut middle = i_dg.partial_piv_lu().solve(&d);
+        // (I + D G)^-1 D is symmetric: made so to its rounding, so that the correction is too.
+        for c in 0..m {
+            for r in 0..c {
+                let v = 0.5 * (middle[(r, c)] + middle[(c, r)]);
+                middle[(r, c)] = v;
+                middle[(c, r)] = v;
+            }
+        }
+        let values = blocks(&(&xq * &middle), &xq);
         progress(1.0);
-        Ok(Self { rows, count, values })
+        Ok(Self { rows, count: read.len(), values })
     }
 
     /// `n_q . dW(q <- p) n_p`: the change of surface node `q`'s displacement along `n_q` under a
@@ -163,20 +172,28 @@ fn window(material: &Material) -> ([f64; 3], [f64; 3], GradedMesh) {
     (lo, hi, mesh)
 }
 
-/// The dense correction `w` (`3 count` square) as 3 x 3 blocks per pair of nodes, made exactly
-/// symmetric.
-fn blocks(w: &Mat<f64>, count: usize) -> Vec<f32> {
+/// The correction `A X_Q'` (`a = X_Q (I + D G)^-1 D`, `xq = X_Q`: a row per displacement
+/// component of a held node) as 3 x 3 blocks per pair of nodes, computed a band of rows at a
+/// time (the whole would be `(3 count)^2` doubles).
+fn blocks(a: &Mat<f64>, xq: &Mat<f64>) -> Vec<f32> {
+    const BAND: usize = 64;
+    let count = xq.nrows() / 3;
     let mut values = vec![0.0f32; 9 * count * count];
-    for q in 0..count {
-        for p in 0..count {
-            let block = &mut values[9 * (q * count + p)..9 * (q * count + p + 1)];
-            for c in 0..3 {
-                for a in 0..3 {
-                    let (i, j) = (3 * q + a, 3 * p + c);
-                    block[3 * c + a] = (0.5 * (w[(i, j)] + w[(j, i)])) as f32;
+    let mut q0 = 0;
+    while q0 < count {
+        let band = BAND.min(count - q0);
+        let w = a.as_ref().subrows(3 * q0, 3 * band) * xq.transpose();
+        for q in 0..band {
+            for p in 0..count {
+                let block = &mut values[9 * ((q0 + q) * count + p)..9 * ((q0 + q) * count + p + 1)];
+                for c in 0..3 {
+                    for r in 0..3 {
+                        block[3 * c + r] = w[(3 * q + r, 3 * p + c)] as f32;
+                    }
                 }
             }
         }
+        q0 += band;
     }
     values
 }
