@@ -87,15 +87,20 @@ pub fn default_params(material: &Material) -> anyhow::Result<MsmParams> {
 /// on the touch benchmark's training cases, the axis lattice on the paper's cases (hybrid GA+SA,
 /// seed 1, static cost, then the L-BFGS polish; see each file's `note`).
 pub fn shipped(material: &Material, topology: Topology) -> anyhow::Result<Shipped> {
-    let is_preset = Material::preset(&material.name)
-        .is_some_and(|p| p.constants == material.constants && p.density == material.density);
-    if !is_preset {
+    // A preset's tissue wherever its constants are (a material file of them, a lump's background
+    // among them), whatever the name.
+    let preset = ["A", "B"].into_iter().find(|name| {
+        Material::preset(name).is_some_and(|p| {
+            p.symmetry == material.symmetry && p.constants == material.constants && p.density == material.density
+        })
+    });
+    let Some(name) = preset else {
         anyhow::bail!(
             "no calibrated tissue is shipped for material {:?} (only the presets A and B); calibrate one",
             material.name
         );
-    }
-    let text = match (material.name.as_str(), topology) {
+    };
+    let text = match (name, topology) {
         ("A", Topology::Shear) => include_str!("../../assets/tissue_A_shear.json"),
         ("B", Topology::Shear) => include_str!("../../assets/tissue_B_shear.json"),
         ("A", Topology::Axis) => include_str!("../../assets/tissue_A_axis.json"),

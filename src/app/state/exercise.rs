@@ -71,7 +71,10 @@ mod tests {
         state.settings.object = crate::app::settings::Source::File;
         state.settings.material_path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/lump_5x_r8.toml").into();
         state.handle(Request::LoadObject, &mut |_| {});
-        assert!(!state.shown.note.as_deref().unwrap_or("").contains("inclusion"), "{:?}", state.shown.note);
+        // Its background is A's tissue: the shipped lattice runs, with nothing to say.
+        assert_eq!(state.shown.note, None);
+        let a = crate::mechanics::material::Material::object_a();
+        assert_eq!(state.shown.params, crate::sim::shipped::default_params(&a).expect("A's tissue"));
         assert!(state.shown.material.inclusions.is_empty());
         assert_eq!(state.shown.inclusions.len(), 1);
         assert_eq!(state.shown.felt_material().inclusions.len(), 1);
