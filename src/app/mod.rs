@@ -28,7 +28,7 @@ pub mod viewer;
 pub mod worker;
 
 /// The headless commands, named when there is no display.
-pub const HEADLESS_HINT: &str = "headless commands: render, simulate, fem, msm, errors, validate, calibrate, reproduce, dynamics, chart, choose, bench \
+pub const HEADLESS_HINT: &str = "headless commands: render, simulate, palpate, fem, msm, errors, validate, calibrate, reproduce, dynamics, chart, choose, bench \
                                  (tissue-sim --help)";
 
 /// True when an X11 or Wayland display is configured.
