@@ -174,7 +174,14 @@ fn fem_steps_on_the_physics_pool() {
     use tissue_sim::mechanics::fem::FemModel;
     use tissue_sim::mechanics::fem::dynamics::{FemDynamics, Formulation};
     use tissue_sim::mechanics::parallel::on_pool;
-    let material = tissue_sim::mechanics::material::Material::object_a();
+    // With a lump in it: its elements' changes applied in the steps too.
+    let mut material = tissue_sim::mechanics::material::Material::object_a();
+    let stiffness = material.stiffness * 5.0;
+    material.inclusions.push(tissue_sim::mechanics::inclusion::Inclusion {
+        centre: [0.05, 0.05, 0.08],
+        radius: 0.008,
+        stiffness,
+    });
     for (n, formulation) in [(12, Formulation::Corotational), (16, Formulation::Linear)] {
         let grid = Grid::new(n).expect("grid");
         let mut fem = FemDynamics::new(FemModel::new(grid, &material), material.density, formulation, 10.0);

@@ -61,4 +61,6 @@ pub struct ViewOptions {
     /// Record what is done and write it here as a `simulate` script (on closing, on SIGINT or
     /// SIGTERM, and from the panel).
     pub record: Option<std::path::PathBuf>,
+    /// Start with this material file (inclusions and all) instead of object A.
+    pub material: Option<std::path::PathBuf>,
 }

@@ -153,14 +153,17 @@ pub struct Shown {
     pub fem: Option<Formulation>,
     /// The running model's touch-benchmark scores (validation set), once computed, or why not.
     pub validation: Option<Result<crate::sim::shipped::RecordedScores, String>>,
+    /// For a material with inclusions, the running model against the material with them
+    /// ([`crate::validate::lumps`]), once computed, or why not.
+    pub lump_validation: Option<Result<crate::validate::lumps::LumpReport, String>>,
     /// The tool held now (drawn over the tissue).
     pub tool: crate::sim::Tool,
     /// The probe's last position (centre, radius; metres), kept after it is let go.
     pub last_probe: Option<([f64; 3], f64)>,
     /// The FEM's and the model's probe force at the last probe position, solved on request.
     pub fem_probe: Option<ProbeComparison>,
-    /// The material file's inclusions: the probe feels them; the model shown steps `material`,
-    /// their background (the lattices and the FEM do not take inclusions yet).
+    /// The material file's inclusions: the probe feels them and the model steps them
+    /// ([`Shown::modelled_material`]); `material` is their background (its calibrated tissue).
     pub inclusions: Vec<crate::mechanics::inclusion::Inclusion>,
     /// Find the lump, while under way (its lump hidden until marked).
     pub exercise: Option<crate::app::exercise::Exercise>,
@@ -169,6 +172,14 @@ pub struct Shown {
 }
 
 impl Shown {
+    /// The material the model steps: the background with the file's inclusions (a hidden lump is
+    /// felt by the probe, not stepped, so that the view does not show where it is).
+    pub fn modelled_material(&self) -> Material {
+        let mut m = self.material.clone();
+        m.inclusions.clone_from(&self.inclusions);
+        m
+    }
+
     /// The material the probe feels: the background with the file's inclusions and the hidden
     /// lump.
     pub fn felt_material(&self) -> Material {

@@ -66,7 +66,7 @@ struct App {
 
 impl App {
     fn new(proxy: EventLoopProxy<Wake>, options: super::ViewOptions) -> anyhow::Result<Self> {
-        let super::ViewOptions { frames: max_frames, screenshot, model, compute, press, record } = options;
+        let super::ViewOptions { frames: max_frames, screenshot, model, compute, press, record, material } = options;
         if record.is_some() {
             // The first SIGINT or SIGTERM closes the viewer as its window would, writing the
             // recording; a second ends the process.
@@ -89,6 +89,11 @@ impl App {
         // The model and compute asked for on the command line, as the panel would ask.
         let mut requests = Vec::with_capacity(16);
         state.settings.compute = compute;
+        if let Some(path) = material {
+            state.settings.object = crate::app::settings::Source::File;
+            state.settings.material_path = path.display().to_string();
+            requests.push(Request::LoadObject);
+        }
         match model {
             Some(crate::sim::Model::Fem(f)) => requests.push(Request::SelectFem(f)),
             Some(crate::sim::Model::Lattice(t)) => requests.push(Request::SelectTopology(t)),

@@ -97,7 +97,7 @@ fn tangent_for<'w>(
 ) -> Result<&'w mut TangentAssembler, CostError> {
     match slot {
         Some(t) => Ok(t),
-        empty => Ok(empty.insert(TangentAssembler::new(model, case_dofs(&model.grid, case))?)),
+        empty => Ok(empty.insert(TangentAssembler::new(model, case_dofs(model, case))?)),
     }
 }
 

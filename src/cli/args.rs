@@ -134,8 +134,15 @@ struct ParamsFile {
 /// The parameters of a calibration result file, checked, with the material of `object` (the
 /// file's object when `object` names none).
 pub fn params_from_file(object: &ObjectArgs, path: &Path) -> anyhow::Result<(Material, MsmParams)> {
+    let (material, params) = params_from_file_with_inclusions(object, path)?;
+    material.require_homogeneous("this command")?;
+    Ok((material, params))
+}
+
+/// [`params_from_file`] for a command that models inclusions.
+pub fn params_from_file_with_inclusions(object: &ObjectArgs, path: &Path) -> anyhow::Result<(Material, MsmParams)> {
     let file: ParamsFile = read_json(path)?;
-    let material = object.material(file.object.as_deref())?;
+    let material = object.material_with_inclusions(file.object.as_deref())?;
     file.params.validate().with_context(|| format!("in {}", path.display()))?;
     if let Some(model) = file.model
         && model != file.params.topology()

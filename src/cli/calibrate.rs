@@ -91,7 +91,7 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
         let hi: f64 = hi.trim().parse().with_context(|| format!("--bound {b:?}: bad upper bound"))?;
         space.set_bound(name.trim(), lo, hi).map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
     }
-    crate::mechanics::msm::statics::check_grid(model, grid.n()).map_err(anyhow::Error::msg)?;
+    crate::mechanics::msm::statics::check_grid(model, grid.n(), false).map_err(anyhow::Error::msg)?;
     // Settings the cost cannot use are refused here, before any reference is computed.
     crate::calibrate::check_setup(&settings, cases, model, grid)?;
     let name = material.name.clone();

@@ -33,9 +33,11 @@ pub struct FemArgs {
 pub fn run(args: FemArgs) -> anyhow::Result<()> {
     let FemArgs { object, bc, grid, out } = args;
     crate::io::check_output(&out)?;
-    let material = object.material(None)?;
+    let material = object.material_with_inclusions(None)?;
     let grid = grid.grid()?;
-    if bc == Bc::Patch {
+    // The patch cases, and any case of a material with inclusions (no mirror symmetry), solve
+    // the full system.
+    if bc == Bc::Patch || !material.inclusions.is_empty() {
         DirectSolve::FemPatch.check_grid(grid.n()).map_err(anyhow::Error::msg)?;
     }
     let cases = benchmark_cases(&grid, &material.name, bc);

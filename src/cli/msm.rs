@@ -32,11 +32,11 @@ pub struct MsmArgs {
 pub fn run(args: MsmArgs) -> anyhow::Result<()> {
     let MsmArgs { object, params, grid, out } = args;
     crate::io::check_output(&out)?;
-    let material = object.material(None)?;
+    let material = object.material_with_inclusions(None)?;
     let params = params.resolve(&material)?;
     let grid = grid.grid()?;
-    statics::check_grid(params.topology(), grid.n()).map_err(anyhow::Error::msg)?;
-    let model = MsmModel::new(grid, params, material.density)?;
+    statics::check_grid(params.topology(), grid.n(), !material.inclusions.is_empty()).map_err(anyhow::Error::msg)?;
+    let model = MsmModel::new(grid, params, material.density)?.with_inclusions(&material);
     let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
     let bar = progress_bar(cases.len() as u64, "cases");
     let sols = statics::solve_cases_with_progress(&model, &cases, &mut |i, id| {

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context as _;
 use clap::Args;
 
-use super::args::{GridArgs, ObjectArgs, params_from_file};
+use super::args::{GridArgs, ObjectArgs, params_from_file_with_inclusions};
 use super::output::{say, say_raw};
 use crate::mechanics::sparse::DirectSolve;
 use crate::sim::Model;
@@ -18,7 +18,9 @@ pub struct ValidateArgs {
     /// The paper's object: A or B (with --material, the label of the report).
     #[arg(long, value_parser = ["A", "B"], ignore_case = true)]
     pub object: Option<String>,
-    /// A material file (TOML, or JSON by extension) in place of the object's constants.
+    /// A material file (TOML, or JSON by extension) in place of the object's constants; with
+    /// inclusions, the presses are over them, and the model is also scored against the material
+    /// with them under a pressure over each.
     #[arg(long)]
     pub material: Option<PathBuf>,
     #[command(flatten)]
@@ -58,20 +60,24 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
     let grid = grid.grid()?;
     let (material, model) = match (params, model.as_deref()) {
         (Some(path), _) => {
-            let (material, p) = params_from_file(&object, &path)?;
+            let (material, p) = params_from_file_with_inclusions(&object, &path)?;
             (material, (Model::Lattice(p.topology()), Some(p)))
         }
-        (None, Some(name)) => {
-            (object.material(None)?, (Model::try_from(name.to_owned()).map_err(anyhow::Error::msg)?, None))
-        }
+        (None, Some(name)) => (
+            object.material_with_inclusions(None)?,
+            (Model::try_from(name.to_owned()).map_err(anyhow::Error::msg)?, None),
+        ),
         (None, None) => {
-            let material = object.material(None)?;
+            let material = object.material_with_inclusions(None)?;
             let p = crate::sim::shipped::default_params(&material)
                 .context("the default tissue: give --params FILE.json or --model fem-linear")?;
             (material, (Model::Lattice(p.topology()), Some(p)))
         }
     };
     DirectSolve::TouchBenchmark.check_grid(grid.n()).map_err(anyhow::Error::msg)?;
+    if !own_mesh_only && !material.inclusions.is_empty() {
+        crate::validate::lumps::refinement(grid)?;
+    }
     // A cache folder given by name must be usable before any work.
     if let Some(dir) = &cache {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot use the cache folder {}", dir.display()))?;
@@ -79,11 +85,17 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
     let reference = touch_score::Reference::new(&material, grid)?;
     let mut report = touch_score::evaluate(&reference, &material, model.0, model.1)
         .with_context(|| format!("scoring {} of material {}", model.0.name(), material.name))?;
+    let inclusions = if own_mesh_only || material.inclusions.is_empty() {
+        None
+    } else {
+        eprintln!("the model against the material with its inclusions: reference solves ...");
+        Some(crate::validate::lumps::evaluate(&material, model.0, model.1, grid)?)
+    };
     let material = if own_mesh_only { None } else { Some(against_material(&material, grid, model, cache, contact)?) };
     if let Some(label) = label {
         report.object = label;
     }
-    let full = Full { report, material };
+    let full = Full { report, material, inclusions };
     if json {
         say(&serde_json::to_string_pretty(&full)?)
     } else {
@@ -91,6 +103,10 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
         if let Some(m) = &full.material {
             text += "\n";
             text += &m.to_text();
+        }
+        if let Some(l) = &full.inclusions {
+            text += "\n";
+            text += &l.to_text();
         }
         say_raw(&text)
     }
@@ -103,6 +119,9 @@ struct Full {
     report: touch_score::Report,
     #[serde(skip_serializing_if = "Option::is_none")]
     material: Option<crate::validate::probe::score::MaterialReport>,
+    /// For a material with inclusions: the model against the material with them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    inclusions: Option<crate::validate::lumps::LumpReport>,
 }
 
 /// The probe presses of `model` against the material, the same-mesh FEM beside it.

@@ -29,6 +29,10 @@ pub struct ViewArgs {
     /// from the panel's "Save recording".
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
+    /// Start with this material file (TOML, or JSON by extension; inclusions and all) instead of
+    /// object A: the lattice of its background's shipped tissue where there is one.
+    #[arg(long, value_name = "FILE")]
+    pub material: Option<PathBuf>,
 }
 
 fn parse_press(s: &str) -> Result<[f64; 3], String> {
@@ -56,6 +60,10 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.record {
         crate::io::check_output(path)?;
     }
+    // Read and checked before the window opens: bad input is a one-line error.
+    if let Some(path) = &args.material {
+        crate::mechanics::material::Material::from_file(path)?;
+    }
     crate::app::run(crate::app::ViewOptions {
         frames: args.frames,
         screenshot: args.screenshot,
@@ -63,6 +71,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         compute: args.compute,
         press: args.press,
         record: args.record,
+        material: args.material,
     })?;
     if crate::io::interrupted() {
         // Closed by SIGINT or SIGTERM, the recording written.

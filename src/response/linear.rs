@@ -82,6 +82,24 @@ impl GroupedStiffness {
         // Unit parameters are valid, so the model always builds.
         let model = MsmModel::new(grid, MsmParams::unit(topology), 1.0)
             .unwrap_or_else(|_| unreachable!("unit parameters are valid"));
+        Self::of_springs(&model, groups, group)
+    }
+
+    /// [`GroupedStiffness::lattice`] of a lattice whose springs take inclusions by `rule`
+    /// ([`crate::mechanics::msm::inclusions`]).
+    pub fn lattice_in(
+        grid: Grid,
+        topology: Topology,
+        rule: Option<&crate::mechanics::msm::inclusions::SpringRule>,
+    ) -> Self {
+        let model = MsmModel::new(grid, MsmParams::unit(topology), 1.0)
+            .unwrap_or_else(|_| unreachable!("unit parameters are valid"))
+            .with_rule(rule.cloned());
+        Self::of_springs(&model, 7, |_, family| group_of(family))
+    }
+
+    /// The rest tangent of `model`'s springs at unit parameters, spring `s` in group `group(s, family)`.
+    fn of_springs(model: &MsmModel, groups: usize, group: impl Fn(&Spring, SpringFamily) -> usize) -> Self {
         let mut out = Self { entries: Vec::new(), unit: Vec::new(), group: Vec::new(), groups };
         for s in model.springs() {
             let fam = model.families[s.family].family;

@@ -30,7 +30,7 @@ impl ModalModel {
         lattice_topology_ok(model.params)?;
         Ok(Self {
             grid: model.grid,
-            stiffness: GroupedStiffness::lattice(model.grid, model.params.topology()),
+            stiffness: GroupedStiffness::lattice_in(model.grid, model.params.topology(), model.inclusions.as_ref()),
             theta: group_values(&model.params).to_vec(),
             node_masses: model.masses.clone(),
         })

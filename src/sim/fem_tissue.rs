@@ -4,7 +4,7 @@
 //! The FEM's state is interleaved (`3 node + component`); the simulation's is component-wise
 //! (`x[c][node]`). The component-wise copy is the state between steps. Both FEMs' symplectic
 //! steps run on it directly ([`FemTissue::step_linear_symplectic`], the stencil's component-wise
-//! product, and [`FemTissue::step_corotational_symplectic`], the corotated elements read
+//! product with the inclusions' elements added, and [`FemTissue::step_corotational_symplectic`], the corotated elements read
 //! component-wise: no copies); every other step copies it in and out (no allocation).
 
 use super::explicit_form::{ExplicitForm, ForceForm};
@@ -17,6 +17,10 @@ use crate::mechanics::grid::Grid;
 use crate::mechanics::msm::MsmParams;
 use crate::response::damping::Damping;
 use crate::response::single_mode::damped_explicit_limit;
+
+/// Why a FEM with inclusions has no `f32` or GPU step.
+const INCLUSIONS_CPU: &str = "a FEM with inclusions steps in f64 on the CPU (the f32 and GPU steps apply the \
+                              homogeneous stencil only)";
 
 /// A FEM cube as a [`Tissue`].
 #[derive(Debug)]
@@ -101,7 +105,7 @@ impl FemTissue {
                 *u = x - r;
             }
         }
-        d.model.stencil().apply_components(&self.u, &mut self.forces);
+        d.model.apply_components(&self.u, &mut self.forces);
         self.advance_symplectic::<true>(dt);
     }
 
@@ -196,7 +200,7 @@ fn symplectic_update(x: &mut f64, v: &mut f64, a: f64, alpha: f64, free: f64, dt
 fn fem_stiffest(model: &FemModel, density: f64, mass: &[f64]) -> f64 {
     use crate::response::stiffest_mode::{LIMIT_ITERATIONS, LIMIT_TOLERANCE, fem};
     let m_e = density * model.grid.h().powi(3) / 8.0;
-    let element = model.ke.symmetric_eigenvalues().max() / m_e;
+    let element = model.stiffest_element() / m_e;
     let free = vec![true; mass.len()];
     let estimate = fem(model, mass, &free, LIMIT_TOLERANCE, LIMIT_ITERATIONS).upper();
     estimate.min(element)
@@ -209,6 +213,9 @@ impl Tissue for FemTissue {
             return Err("the corotational FEM has no GPU step (its rotations are per element): \
                         the lattices and the linear FEM have one"
                 .into());
+        }
+        if !d.model.patch().is_empty() {
+            return Err(INCLUSIONS_CPU.into());
         }
         let nn = self.free.len();
         Ok(ExplicitForm {
@@ -226,6 +233,9 @@ impl Tissue for FemTissue {
         if single && self.dynamics.formulation != Formulation::Linear {
             return Err("the corotational FEM has no f32 step (its rotations are per element): the lattices and the linear FEM \
                         have one".into());
+        }
+        if single && !self.dynamics.model.patch().is_empty() {
+            return Err(INCLUSIONS_CPU.into());
         }
         let nn = if single { self.free.len() } else { 0 };
         for buffer in self.u_f32.iter_mut().chain(&mut self.ku_f32) {

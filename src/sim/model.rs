@@ -59,8 +59,9 @@ impl Model {
         }
     }
 
-    /// The running tissue of `material` at rest on the paper's grid: a lattice with `params`
-    /// (the shipped tissue where `None`), or the FEM; damped by the ratio `zeta` at its
+    /// The running tissue of `material` (its inclusions too: the FEM's elements take them, a
+    /// lattice's springs by [`crate::mechanics::msm::inclusions`]) at rest on the paper's grid: a
+    /// lattice with `params` (the shipped tissue where `None`), or the FEM; damped by the ratio `zeta` at its
     /// fundamental ([`crate::response::damping`]), except the paper's axis lattice, which keeps
     /// its nodal `d`.
     pub fn build(self, material: &Material, params: Option<MsmParams>, zeta: f64) -> anyhow::Result<Box<dyn Tissue>> {
@@ -97,7 +98,8 @@ impl Model {
                     Some(p) => p,
                     None => crate::sim::shipped::msm_params_at(material, t, &grid)?,
                 };
-                Box::new(MsmTissue::new(MsmModel::new(grid, p, material.density)?, material.density))
+                let model = MsmModel::new(grid, p, material.density)?.with_inclusions(material);
+                Box::new(MsmTissue::new(model, material.density))
             }
             Model::Fem(f) => Box::new(FemTissue::new(grid, material, f)),
         })

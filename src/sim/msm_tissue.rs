@@ -153,7 +153,7 @@ impl Tissue for MsmTissue {
         Some(self.model.params)
     }
     fn set_params(&mut self, params: MsmParams) -> Result<(), String> {
-        let mut model = MsmModel::new(self.model.grid, params, self.density).map_err(|e| e.to_string())?;
+        let mut model = self.model.with_params(params, self.density).map_err(|e| e.to_string())?;
         // The paper's axis lattice has no fundamental to set a ratio at: its nodal `d`.
         let damping = match self.ratio {
             Some(zeta) if params.topology() != crate::mechanics::msm::Topology::Axis => {

@@ -119,7 +119,7 @@ pub fn errors_report(
     use crate::mechanics::cases::{Bc, benchmark_cases};
     use crate::mechanics::fem::FemModel;
     use crate::mechanics::msm::{MsmModel, statics};
-    statics::check_grid(params.topology(), grid.n()).map_err(anyhow::Error::msg)?;
+    statics::check_grid(params.topology(), grid.n(), false).map_err(anyhow::Error::msg)?;
     let cases = benchmark_cases(&grid, &material.name, Bc::Clamped);
     let fem = FemModel::new(grid, material)
         .solve_cases(&cases)

@@ -97,3 +97,26 @@ fn the_probe_feels_a_lump_as_the_continuum_does() {
         }
     }
 }
+
+/// The running models take the shipped 5x lump (the FEM's elements, the hex lattice's springs by
+/// its rule): under a pressure over it, the face sinks less by about what the material's does;
+/// away from it, nothing to speak of (against the FEM with the lump on a grid refined 5 times).
+#[test]
+fn the_models_take_the_lump_as_the_material_does() {
+    use tissue_sim::mechanics::fem::dynamics::Formulation;
+    use tissue_sim::mechanics::msm::Topology;
+    use tissue_sim::sim::Model;
+    let lump = shipped("lump_5x_r8.toml");
+    let grid = tissue_sim::mechanics::grid::Grid::paper();
+    for model in [Model::Fem(Formulation::Linear), Model::Lattice(Topology::Hex)] {
+        let r = tissue_sim::validate::lumps::evaluate(&lump, model, None, grid).expect("scored");
+        assert!(r.reference_change < 0.02, "{}", r.to_text());
+        let (over, rim, away) = (&r.cases[0], &r.cases[1], &r.cases[2]);
+        assert!(over.id.ends_with("over") && rim.id.ends_with("rim") && away.id.ends_with("away"));
+        assert!((-0.14..-0.08).contains(&over.material_effect), "{}", r.to_text());
+        for c in [over, rim] {
+            assert!((c.model_effect - c.material_effect).abs() < 0.04, "{model}: {}", r.to_text());
+        }
+        assert!(away.model_effect.abs() < 0.005 && away.material_effect.abs() < 0.005, "{}", r.to_text());
+    }
+}

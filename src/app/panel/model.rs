@@ -54,6 +54,31 @@ fn validation(ui: &mut egui::Ui, shown: &Shown, requests: &mut Vec<Request>) {
     }
 }
 
+/// For a material with inclusions: the running model against the material with them, over each.
+fn lump_validation(ui: &mut egui::Ui, shown: &Shown) {
+    match &shown.lump_validation {
+        None if !shown.inclusions.is_empty() => {
+            ui.label("with its inclusions: computing the material's answer...");
+        }
+        None => {}
+        Some(Err(e)) => {
+            ui.label(format!("with its inclusions: {e}"));
+        }
+        Some(Ok(r)) => {
+            for c in r.cases.iter().filter(|c| c.id.ends_with("_over")) {
+                ui.label(format!(
+                    "{}: a {} N pressure over it sinks {:.1} % less with it, the material {:.1} % (field error {:.1} %)",
+                    c.id.trim_start_matches("pressure_").trim_end_matches("_over"),
+                    crate::validate::lumps::PRESSURE_FORCE_N,
+                    -100.0 * c.model_effect,
+                    -100.0 * c.material_effect,
+                    100.0 * c.field_error
+                ));
+            }
+        }
+    }
+}
+
 /// The resolution control: nodes per edge, applied when the slider is let go.
 fn resolution(ui: &mut egui::Ui, settings: &mut ViewSettings, requests: &mut Vec<Request>) {
     let slider = ui.add(egui::Slider::new(&mut settings.nodes, 4..=24).text("nodes per edge"));
@@ -127,6 +152,7 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
     resolution(ui, settings, requests);
     compute(ui, settings, requests);
     validation(ui, shown, requests);
+    lump_validation(ui, shown);
     if shown.fem.is_some() {
         ui.label(
             "The hex8 FEM (the reference itself): no spring parameters; damped by the ratio set under Integrator.",

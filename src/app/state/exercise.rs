@@ -50,7 +50,7 @@ mod tests {
         let e = state.shown.exercise.clone().expect("a lump hidden");
         assert_eq!((e.lump.seed, state.settings.lump_seed), (1, 2));
         assert_eq!(state.shown.felt_material().inclusions, vec![e.lump.inclusion.clone()]);
-        assert!(state.shown.material.inclusions.is_empty(), "the model steps the background");
+        assert!(state.shown.modelled_material().inclusions.is_empty(), "the model does not show the hidden lump");
         // Not yet felt: no mark.
         state.handle(Request::MarkLump, &mut |c| sent.push(c));
         assert!(state.shown.exercise.as_ref().is_some_and(|e| e.mark.is_none()));
@@ -66,7 +66,7 @@ mod tests {
     }
 
     #[test]
-    fn a_material_file_with_a_lump_steps_its_background_and_the_probe_feels_the_lump() {
+    fn a_material_file_with_a_lump_runs_its_backgrounds_tissue_and_steps_and_feels_the_lump() {
         let (mut state, _) = ViewerState::new(|| {}).expect("the viewer state");
         state.settings.object = crate::app::settings::Source::File;
         state.settings.material_path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/examples/lump_5x_r8.toml").into();
@@ -78,6 +78,7 @@ mod tests {
         assert!(state.shown.material.inclusions.is_empty());
         assert_eq!(state.shown.inclusions.len(), 1);
         assert_eq!(state.shown.felt_material().inclusions.len(), 1);
+        assert_eq!(state.shown.modelled_material().inclusions.len(), 1);
         assert_eq!(state.shown.material.stiffness, crate::mechanics::material::Material::object_a().stiffness);
     }
 }

@@ -29,6 +29,14 @@ pub(super) enum ComplianceMessage {
     Done(Result<(MaterialSurface, Arc<SurfaceCompliance>, Option<[f64; 2]>), String>),
 }
 
+/// What the validation job reports: the touch benchmark's scores, then, for a material with
+/// inclusions, the model against the material with them.
+#[derive(Debug)]
+pub(super) enum Scored {
+    Touch(Result<crate::sim::shipped::RecordedScores, String>),
+    Lumps(Result<crate::validate::lumps::LumpReport, String>),
+}
+
 impl ViewerState {
     /// Loads (or computes, about a minute, and keeps) the material's surface compliance in the
     /// background; the probe uses the model's surface nodes until it is ready.
@@ -137,16 +145,19 @@ impl ViewerState {
         }
     }
 
-    /// Scores the running model on the touch benchmark in the background (again when it ends,
-    /// if the model changes meanwhile).
+    /// Scores the running model on the touch benchmark in the background, and for a material
+    /// with inclusions against the material with them (again when it ends, if the model changes
+    /// meanwhile: the running one is asked to stop).
     pub(super) fn start_validation(&mut self) {
         if self.validation.busy() {
+            self.validation.cancel();
             self.validation_stale = true;
             return;
         }
         self.validation_stale = false;
         self.shown.validation = None;
-        let (material, grid) = (self.shown.material.clone(), self.grid);
+        self.shown.lump_validation = None;
+        let (material, grid) = (self.shown.modelled_material(), self.grid);
         let model = self.model_under_test();
         let wake = Arc::clone(&self.wake);
         let started = self.validation.start(
@@ -163,11 +174,24 @@ impl ViewerState {
                         worst_frequency_error: r.worst_frequency_error,
                     })
                     .map_err(|e| format!("{e:#}"));
-                ctx.send(r);
+                let touched = r.is_ok();
+                ctx.send(Scored::Touch(r));
+                if material.inclusions.is_empty() || ctx.cancelled() {
+                    return;
+                }
+                let r = if touched {
+                    let stop = || ctx.cancelled();
+                    crate::validate::lumps::evaluate_until(&material, model.0, Some(model.1), grid, &stop)
+                        .map_err(|e| format!("{e:#}"))
+                } else {
+                    Err("not scored (the touch validation failed)".into())
+                };
+                ctx.send(Scored::Lumps(r));
             },
         );
         if let Err(e) = started {
             self.shown.validation = Some(Err(e.to_string()));
+            self.shown.lump_validation = Some(Err(e.to_string()));
         }
     }
 
@@ -178,7 +202,7 @@ impl ViewerState {
             self.shown.note = Some("press the probe into the cube first".into());
             return;
         };
-        let (material, grid) = (self.shown.material.clone(), self.grid);
+        let (material, grid) = (self.shown.modelled_material(), self.grid);
         let model = self.model_under_test();
         let wake = Arc::clone(&self.wake);
         let started = self.fem_probe.start(

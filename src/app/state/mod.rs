@@ -93,7 +93,7 @@ pub struct ViewerState {
     grid: Grid,
     fem: Slot<Result<Vec<[f64; 3]>, String>>,
     calibration: Slot<Progress>,
-    validation: Slot<Result<crate::sim::shipped::RecordedScores, String>>,
+    validation: Slot<jobs::Scored>,
     /// The model changed while a validation ran: score it again when that one ends.
     validation_stale: bool,
     fem_probe: Slot<Result<ProbeComparison, String>>,
@@ -163,6 +163,7 @@ impl ViewerState {
                 force_depth: Vec::new(),
                 fem: None,
                 validation: None,
+                lump_validation: None,
                 tool: Tool::None,
                 last_probe: None,
                 fem_probe: None,
@@ -201,7 +202,7 @@ impl ViewerState {
             recipe: recipe(
                 self.shown.model(),
                 self.grid,
-                self.shown.material.clone(),
+                self.shown.modelled_material(),
                 self.shown.params,
                 self.shown.damping_ratio,
                 self.settings.compute,
@@ -302,7 +303,7 @@ impl ViewerState {
     fn apply_case(&mut self, send: &mut dyn FnMut(Command)) {
         let case =
             LoadCase::clamped(&self.grid, &self.shown.material.name, self.settings.case_axis, self.settings.case_force);
-        let material = self.shown.material.clone();
+        let material = self.shown.modelled_material();
         let grid = self.grid;
         let solve = case.clone();
         let wake = Arc::clone(&self.wake);
@@ -365,9 +366,13 @@ impl ViewerState {
             self.shown.note = Some(format!("the FEM solve stopped unexpectedly ({why})"));
         }
         let shown = &mut self.shown;
-        let ended = self.validation.poll(|r| shown.validation = Some(r));
+        let ended = self.validation.poll(|r| match r {
+            jobs::Scored::Touch(r) => shown.validation = Some(r),
+            jobs::Scored::Lumps(r) => shown.lump_validation = Some(r),
+        });
         if let Some(State::Stopped(why)) = ended {
             self.shown.validation = Some(Err(format!("stopped unexpectedly ({why})")));
+            self.shown.lump_validation = Some(Err(format!("stopped unexpectedly ({why})")));
         }
         if self.validation_stale && !self.validation.busy() {
             self.start_validation();

@@ -23,7 +23,8 @@ impl ViewerState {
             }
             Source::Object(object) => (object.material(), None),
         };
-        // The model steps the background; the probe feels the inclusions too.
+        // The shown material is the background (its calibrated tissue); the model steps the
+        // inclusions too ([`crate::app::settings::Shown::modelled_material`]).
         let inclusions = material.inclusions.clone();
         let material = material.background();
         let params = crate::sim::shipped::msm_params_at(&material, topology, &self.grid).unwrap_or_else(|_| {

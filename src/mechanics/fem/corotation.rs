@@ -396,6 +396,30 @@ impl Corotation<'_> {
         self.layer_of::<f64>(k, last, next, &mut out);
     }
 
+    /// `out[c][node] -= ` the corotated forces of the inclusions' changes of stiffness, each
+    /// element's turned by its rotation in `rotations` (as [`Corotation::all`] left them).
+    /// Allocates nothing.
+    pub fn patched(self, patch: &[super::inclusions::PatchedElement], rotations: &[[f64; 4]], out: &mut [Vec<f64>; 3]) {
+        for e in patch {
+            let r = matrix::<f64>(rotations[e.index]);
+            let x0: V3<f64> = std::array::from_fn(|c| self.x[c][e.nodes[0]]);
+            let mut local = [[0.0; 3]; 8];
+            for a in 1..8 {
+                let d: V3<f64> = std::array::from_fn(|c| self.x[c][e.nodes[a]] - x0[c]);
+                for c in 0..3 {
+                    let rotated = r[0][c] * d[0] + r[1][c] * d[1] + r[2][c] * d[2];
+                    local[a][c] = rotated - self.rest_spacing * NODE_SIDES[a][c] as f64;
+                }
+            }
+            let fl = dense_product::<f64>(&e.delta, &local);
+            for (a, &p) in e.nodes.iter().enumerate() {
+                for (row, out) in out.iter_mut().enumerate() {
+                    out[p] -= dot(r[row], fl[a]);
+                }
+            }
+        }
+    }
+
     /// Every element's rotation (from `last` into `next`, element order `i + m (j + m k)`) and
     /// `out[c][node] -= ` its forces. Two passes, the even layers of elements and then the odd
     /// ones: within a pass no two layers share a node, so the layers of a pass are split over

@@ -270,6 +270,7 @@ impl FemDynamics {
             tolerance: self.rotation_tolerance,
         };
         at.all(&self.rotations, &mut self.next_rotations, out, self.parallel);
+        at.patched(self.model.patch(), &self.next_rotations, out);
         std::mem::swap(&mut self.rotations, &mut self.next_rotations);
     }
 

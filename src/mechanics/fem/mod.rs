@@ -1,20 +1,22 @@
 //! Linear static finite elements: the reference the mass-spring model is calibrated against.
 //!
 //! Hex8 elements with full 2x2x2 Gauss integration ([`element`]); every element of the
-//! structured cube is identical, so one element matrix serves them all. Fixed degrees of freedom
+//! structured cube is identical, so one element matrix serves them all, the background's; the
+//! elements a material's inclusions meet add their change ([`inclusions`]). Fixed degrees of freedom
 //! are eliminated, the reduced stiffness is factorised once per constraint set with faer's sparse
 //! Cholesky (symbolic analysis kept), and every solve is followed by iterative refinement on the
 //! element-by-element residual so that answers sit at round-off.
 //!
 //! [`clamped`]: the clamped cases by symmetry; [`stencil`]: the linear FEM's `K u` as a stencil;
 //! [`corotation`]: the corotated element force; [`dynamics`]: lumped masses, damping and the steps;
-//! [`graded`]: meshes graded around a contact.
+//! [`graded`]: meshes graded around a contact; [`inclusions`]: the elements an inclusion meets.
 
 pub mod clamped;
 pub mod corotation;
 pub mod dynamics;
 pub mod element;
 pub mod graded;
+pub mod inclusions;
 pub mod stencil;
 
 use crate::mechanics::cases::{CaseSolution, LoadCase};
@@ -31,12 +33,15 @@ const REFINEMENT_STEPS: usize = 2;
 pub struct FemModel {
     /// The grid.
     pub grid: Grid,
-    /// The element stiffness, shared by every element.
+    /// The background's element stiffness, shared by every element (those an inclusion meets add
+    /// their change, [`FemModel::patch`]).
     pub ke: ElementStiffness,
     /// The material stiffness `C` (Voigt).
     pub material: nalgebra::Matrix6<f64>,
     elements: Vec<[usize; 8]>,
     stencil: stencil::Stencil,
+    /// The elements the material's inclusions meet, with their change of stiffness.
+    patch: Vec<inclusions::PatchedElement>,
 }
 
 impl FemModel {
@@ -45,21 +50,35 @@ impl FemModel {
         &self.elements
     }
 
+    /// The elements the material's inclusions meet and their change of stiffness (empty for a
+    /// homogeneous material).
+    pub fn patch(&self) -> &[inclusions::PatchedElement] {
+        &self.patch
+    }
+
     /// The lower-triangle entries `(row, col)` of every element matrix over global dofs, with
-    /// their values (duplicates add up at assembly).
+    /// their values (duplicates add up at assembly), the inclusions' changes too.
     pub fn stiffness_entries(&self) -> (Vec<(usize, usize)>, Vec<f64>) {
-        let mut entries = Vec::with_capacity(self.elements.len() * 300);
+        let mut entries = Vec::with_capacity((self.elements.len() + self.patch.len()) * 300);
         let mut values = Vec::with_capacity(entries.capacity());
-        for nodes in &self.elements {
+        let blocks = self.elements.iter().map(|n| (n, &self.ke)).chain(self.patch.iter().map(|e| (&e.nodes, &e.delta)));
+        for (nodes, ke) in blocks {
             let dof = |l: usize| 3 * nodes[l / 3] + l % 3;
             for a in 0..24 {
                 for b in 0..=a {
                     entries.push((dof(a), dof(b)));
-                    values.push(self.ke[(a, b)]);
+                    values.push(ke[(a, b)]);
                 }
             }
         }
         (entries, values)
+    }
+
+    /// The largest eigenvalue of any element's matrix (the background's, or one an inclusion
+    /// meets), N/m.
+    pub fn stiffest_element(&self) -> f64 {
+        let largest = |k: &element::ElementStiffness| k.symmetric_eigenvalues().max();
+        self.patch.iter().map(|e| largest(&(self.ke + e.delta))).fold(largest(&self.ke), f64::max)
     }
 
     /// The assembled stiffness as a dense matrix (small grids, for tests against dense solves).
@@ -77,9 +96,8 @@ impl FemModel {
         k
     }
 
-    /// Builds the element matrix of `material` on `grid`: one for every element, the background's
-    /// (the stencil models a homogeneous material; a material with inclusions is refused where it
-    /// enters, [`Material::require_homogeneous`], and modelled by [`graded::GradedFem`]).
+    /// Builds the element matrix of `material` on `grid`: the background's for every element (the
+    /// stencil), and the change of each element an inclusion meets ([`inclusions`]).
     pub fn new(grid: Grid, material: &Material) -> Self {
         let ke = hex8_stiffness(&material.stiffness, grid.h());
         Self {
@@ -88,6 +106,7 @@ impl FemModel {
             ke,
             material: material.stiffness,
             elements: grid.elements().collect(),
+            patch: inclusions::patch(&grid, material),
         }
     }
 
@@ -96,9 +115,17 @@ impl FemModel {
         &self.stencil
     }
 
-    /// `out = K u` over all degrees of freedom, by the stencil ([`stencil`]). Allocates nothing.
+    /// `out = K u` over all degrees of freedom, by the stencil ([`stencil`]) and the inclusions'
+    /// elements. Allocates nothing.
     pub fn apply(&self, u: &[f64], out: &mut [f64]) {
         self.stencil.apply(u, out);
+        inclusions::add_product(&self.patch, u, out);
+    }
+
+    /// [`FemModel::apply`] on component-wise arrays (`u[c][node]`). Allocates nothing.
+    pub fn apply_components(&self, u: &[Vec<f64>; 3], out: &mut [Vec<f64>; 3]) {
+        self.stencil.apply_components(u, out);
+        inclusions::add_product_components(&self.patch, u, out);
     }
 
     /// `out = K u` over all degrees of freedom, element by element: the stencil's check, and
@@ -125,10 +152,11 @@ impl FemModel {
                 }
             }
         }
+        inclusions::add_product(&self.patch, u, out);
     }
 
-    /// Solves all `cases`: clamped ones with the symmetry-reduced [`clamped::ClampedSolver`]
-    /// (one numeric factorisation per loaded axis), others with the general [`StaticSolver`]
+    /// Solves all `cases`: clamped ones of a homogeneous material with the symmetry-reduced
+    /// [`clamped::ClampedSolver`] (one numeric factorisation per loaded axis), others with the general [`StaticSolver`]
     /// (one numeric factorisation per set of fixed degrees of freedom).
     pub fn solve_cases(&self, cases: &[LoadCase]) -> Result<Vec<CaseSolution>, SparseError> {
         self.solve_cases_with_progress(cases, &mut |_, _| {})
@@ -145,7 +173,8 @@ impl FemModel {
         let mut out = Vec::with_capacity(cases.len());
         for (i, case) in cases.iter().enumerate() {
             progress(i, &case.id);
-            let sol = if case.bc == crate::mechanics::cases::Bc::Clamped {
+            // The symmetry-reduced solver needs the material mirror-symmetric: no inclusions.
+            let sol = if case.bc == crate::mechanics::cases::Bc::Clamped && self.patch.is_empty() {
                 let solver = match &mut clamped {
                     Some(s) => s,
                     None => clamped.insert(clamped::ClampedSolver::new(self.grid, &self.material)?),

@@ -4,10 +4,12 @@
 //! feels the damping force `-d v`. [`model`] holds the parameters and springs, [`forces`] the force
 //! and tangent kernels, [`statics`] the exact equilibrium, [`dynamics`] the time integrators.
 //!
-//! [`reduction`]: the clamped cases' mirror-symmetric unknowns; [`single`]: the force in `f32`.
+//! [`reduction`]: the clamped cases' mirror-symmetric unknowns; [`single`]: the force in `f32`;
+//! [`inclusions`]: the springs' rule for a material's inclusions.
 
 pub mod dynamics;
 pub mod forces;
+pub mod inclusions;
 pub mod model;
 pub mod reduction;
 pub mod single;

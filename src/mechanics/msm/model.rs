@@ -249,6 +249,8 @@ pub struct MsmModel {
     /// Damping coefficient of each node, N s/m (force `-c_p v_p`): the paper's nodal `d` on every
     /// node as built, or mass-proportional `alpha m_p` after [`MsmModel::set_mass_damping`].
     pub damping: Vec<f64>,
+    /// The rule of the material's inclusions its springs take ([`super::inclusions`]), if any.
+    pub inclusions: Option<super::inclusions::SpringRule>,
 }
 
 impl MsmModel {
@@ -294,7 +296,39 @@ impl MsmModel {
         let node_mass = density * side * side * side / grid.num_nodes() as f64;
         let masses = if hex { lumped_masses(&grid, density) } else { vec![node_mass; grid.num_nodes()] };
         let damping = vec![params.d; grid.num_nodes()];
-        Ok(Self { grid, params, node_mass, masses, families, damping })
+        Ok(Self { grid, params, node_mass, masses, families, damping, inclusions: None })
+    }
+
+    /// The model with `material`'s inclusions taken by its springs ([`super::inclusions`]): each
+    /// spring crossing one is scaled by the rule. Unchanged for a homogeneous material.
+    pub fn with_inclusions(self, material: &crate::mechanics::material::Material) -> Self {
+        let rule = super::inclusions::SpringRule::new(self.grid, material);
+        self.with_rule(rule)
+    }
+
+    /// The model with its springs scaled by `rule` (none: unchanged).
+    pub fn with_rule(mut self, rule: Option<super::inclusions::SpringRule>) -> Self {
+        debug_assert!(self.inclusions.is_none(), "the springs take a rule once");
+        debug_assert!(rule.as_ref().is_none_or(|r| r.grid() == self.grid), "a rule of the model's grid");
+        self.inclusions = rule;
+        self.apply_inclusions();
+        self
+    }
+
+    /// The model of `params` on the same grid, density and inclusions.
+    pub fn with_params(&self, params: MsmParams, density: f64) -> Result<Self, ParamError> {
+        Ok(Self::new(self.grid, params, density)?.with_rule(self.inclusions.clone()))
+    }
+
+    fn apply_inclusions(&mut self) {
+        let Some(rule) = &self.inclusions else { return };
+        for f in &mut self.families {
+            for (p, k) in f.stiffness.iter_mut().enumerate() {
+                if *k != 0.0 {
+                    *k *= rule.factor(f.lo + p, f.lo + p + f.offset);
+                }
+            }
+        }
     }
 
     /// Mass-proportional damping `C = alpha M` (1/s) instead of the nodal `d`: the Rayleigh

@@ -81,7 +81,7 @@ pub struct NewtonReport {
 /// The exact equilibrium of the axis-spring model under a clamped case, or `None` when the fast
 /// path does not apply (other topology or boundary conditions).
 pub fn closed_form_axis(model: &MsmModel, case: &LoadCase) -> Option<Vec<[f64; 3]>> {
-    if model.params.topology() != Topology::Axis || case.bc != Bc::Clamped {
+    if model.params.topology() != Topology::Axis || case.bc != Bc::Clamped || model.inclusions.is_some() {
         return None;
     }
     let a = case.axis - 1;
@@ -115,12 +115,12 @@ fn norm_free(v: &[Vec<f64>; 3], free: &[bool]) -> f64 {
     s.sqrt()
 }
 
-/// The reduced unknowns a case is solved in: the mirror-symmetric quarter for a clamped case,
-/// every free degree of freedom otherwise.
-pub fn case_dofs(grid: &crate::mechanics::grid::Grid, case: &LoadCase) -> DofMap {
+/// The reduced unknowns a case of `model` is solved in: the mirror-symmetric quarter for a
+/// clamped case of a lattice without inclusions, every free degree of freedom otherwise.
+pub fn case_dofs(model: &MsmModel, case: &LoadCase) -> DofMap {
     match case.bc {
-        Bc::Clamped => DofMap::clamped_symmetric(grid, case.axis - 1),
-        Bc::Patch => DofMap::free(&case.fixed_nodes()),
+        Bc::Clamped if model.inclusions.is_none() => DofMap::clamped_symmetric(&model.grid, case.axis - 1),
+        Bc::Clamped | Bc::Patch => DofMap::free(&case.fixed_nodes()),
     }
 }
 
@@ -131,7 +131,7 @@ pub fn solve_newton(
     case: &LoadCase,
     opts: NewtonOptions,
 ) -> Result<(Vec<[f64; 3]>, NewtonReport), StaticError> {
-    let mut tangent = TangentAssembler::new(model, case_dofs(&model.grid, case))?;
+    let mut tangent = TangentAssembler::new(model, case_dofs(model, case))?;
     solve_newton_with(model, case, opts, &mut tangent, None)
 }
 
@@ -328,11 +328,11 @@ fn reaction(model: &MsmModel, case: &LoadCase, u: &[[f64; 3]]) -> [f64; 3] {
 }
 
 /// Whether the static answer of a `topology` lattice at `n` nodes per axis is within reach: the
-/// axis lattice's closed form always is; the shear and hex lattices' Newton solve is bounded by
-/// its sparse factor ([`crate::mechanics::sparse::DirectSolve::MsmNewton`]).
-pub fn check_grid(topology: Topology, n: usize) -> Result<(), String> {
+/// axis lattice's closed form always is (without inclusions); a Newton solve is bounded by its
+/// sparse factor ([`crate::mechanics::sparse::DirectSolve::MsmNewton`]).
+pub fn check_grid(topology: Topology, n: usize, inclusions: bool) -> Result<(), String> {
     match topology {
-        Topology::Axis => Ok(()),
-        Topology::Shear | Topology::Hex => crate::mechanics::sparse::DirectSolve::MsmNewton.check_grid(n),
+        Topology::Axis if !inclusions => Ok(()),
+        _ => crate::mechanics::sparse::DirectSolve::MsmNewton.check_grid(n),
     }
 }

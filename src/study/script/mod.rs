@@ -241,13 +241,6 @@ impl Script {
                 let path = folder.join(file);
                 let material = Material::from_file(&path)
                     .map_err(|e| anyhow::anyhow!("script: material {}: {e:#}", path.display()))?;
-                if !material.inclusions.is_empty() && self.contact == Contact::Nodes {
-                    anyhow::bail!(
-                        "script: material {} has inclusions, which only the probe's contact \"surface\" feels (the \
-                         models' nodes do not take them): leave \"contact\" out or set it to \"surface\"",
-                        path.display()
-                    );
-                }
                 Ok(material)
             }
             (Some(_), Some(_)) => anyhow::bail!("script: give \"object\" or \"material\", not both"),
@@ -266,8 +259,8 @@ pub fn run_from(script: &Script, folder: &std::path::Path) -> anyhow::Result<Out
     let material = script.material_from(folder)?;
     check_script(script, &material.name)?;
     let grid = Grid::new(script.nodes)?;
-    // The model steps the background; the probe's contact feels the inclusions too.
-    let tissue = tissue(script, grid, &material.background())?;
+    // The model takes the inclusions (its elements or springs), and so does the probe's contact.
+    let tissue = tissue(script, grid, &material)?;
     let case = clamp_case(&grid, &material.name, &script.clamp)?;
     let mut sim = Simulation::with_tissue(tissue, Integrator::Symplectic, script.dt, case.as_ref());
     // The viewer's step policy: refused before the first step.

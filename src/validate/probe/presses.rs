@@ -110,6 +110,53 @@ pub fn press_cases() -> Vec<PressCase> {
     out
 }
 
+/// The probe of the presses over inclusions: radius and depth, metres (what a hand feels with).
+const LUMP_PROBES: [(f64, f64); 2] = [(0.015, 0.004), (0.010, 0.003)];
+/// How far from the point over an inclusion's centre the press away from it is, beyond its
+/// radius, metres.
+const AWAY_M: f64 = 0.025;
+
+/// The presses scored for a material with inclusions, all in the validation set (nothing is
+/// fitted to a lump): for each inclusion, on the free face nearest its centre, the 15 mm probe
+/// 4 mm deep over its centre, over its rim and 25 mm beyond the rim (along the face, towards the
+/// cube's middle; left out where that is off the face), and the 10 mm probe 3 mm deep over its
+/// centre.
+pub fn lump_press_cases(material: &crate::mechanics::material::Material) -> Vec<PressCase> {
+    let l = CUBE_SIDE_M;
+    let mut out = Vec::new();
+    for (i, inclusion) in material.inclusions.iter().enumerate() {
+        let c = inclusion.centre;
+        // (distance, normal axis, face coordinate, tangent axis) of each free face.
+        let faces =
+            [(l - c[2], 2, l, 0), (l - c[0], 0, l, 1), (c[0], 0, 0.0, 1), (l - c[1], 1, l, 0), (c[1], 1, 0.0, 0)];
+        let (_, axis, level, tangent) = faces.into_iter().fold(faces[0], |a, b| if b.0 < a.0 { b } else { a });
+        let towards_middle = if c[tangent] < 0.5 * l { 1.0 } else { -1.0 };
+        // On the face, off its edges by a millimetre at least; a press that would not be is left out.
+        let at = |shift: f64| {
+            let mut p = c;
+            p[axis] = level;
+            p[tangent] = c[tangent] + towards_middle * shift;
+            (0.001..=l - 0.001).contains(&p[tangent]).then_some(p)
+        };
+        let (r15, r10) = (LUMP_PROBES[0], LUMP_PROBES[1]);
+        for (what, shift, (radius, depth)) in [
+            ("over", 0.0, r15),
+            ("rim", inclusion.radius, r15),
+            ("away", inclusion.radius + AWAY_M, r15),
+            ("over", 0.0, r10),
+        ] {
+            if let Some(at) = at(shift) {
+                out.push(PressCase {
+                    id: format!("press_lump{}_{what}_r{}_d{}", i + 1, radius * 1e3, depth * 1e3),
+                    set: Set::Validation,
+                    press: Press::normal(at, radius, depth),
+                });
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -127,5 +174,31 @@ mod tests {
                 assert_ne!(a.press.at, b.press.at);
             }
         }
+    }
+
+    #[test]
+    fn lump_presses_sit_on_the_nearest_free_face_over_rim_and_away() {
+        let mut material = crate::mechanics::material::Material::object_a();
+        let stiffness = material.stiffness * 5.0;
+        material.inclusions.push(crate::mechanics::inclusion::Inclusion {
+            centre: [0.07, 0.05, 0.082],
+            radius: 0.008,
+            stiffness,
+        });
+        material.inclusions.push(crate::mechanics::inclusion::Inclusion {
+            centre: [0.09, 0.03, 0.04],
+            radius: 0.006,
+            stiffness,
+        });
+        let cases = lump_press_cases(&material);
+        assert_eq!(cases.len(), 8);
+        for c in &cases {
+            c.press.check().unwrap();
+            assert_eq!(c.set, Set::Validation);
+        }
+        assert_eq!(cases[0].press.at, [0.07, 0.05, CUBE_SIDE_M]);
+        assert!((cases[1].press.at[0] - 0.062).abs() < 1e-12 && (cases[2].press.at[0] - 0.037).abs() < 1e-12);
+        assert_eq!(cases[4].press.at, [CUBE_SIDE_M, 0.03, 0.04]);
+        assert!((cases[5].press.at[1] - 0.036).abs() < 1e-12, "{:?}", cases[5].press.at);
     }
 }

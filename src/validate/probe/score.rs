@@ -50,6 +50,10 @@ pub struct MaterialReport {
     pub worst_training_error: f64,
     /// Largest `|own_mesh_fem_force_n / material_force_n - 1|` over the validation presses.
     pub own_mesh_fem_worst_error: f64,
+    /// Presses over inclusions whose continuum answer could not be computed (within its memory
+    /// bound), and why: left out of the scores.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub missing: Vec<String>,
 }
 
 /// The force along the press's direction of a responder's node contact.
@@ -79,13 +83,20 @@ pub fn evaluate(
     tolerance: f64,
     progress: &mut dyn FnMut(usize, usize, &PressCase, f64),
 ) -> anyhow::Result<MaterialReport> {
-    let cases = press_cases();
+    // A material with inclusions is scored over them, at their rims and away from them.
+    let cases = if material.inclusions.is_empty() { press_cases() } else { super::presses::lump_press_cases(material) };
     let mut scores = Vec::with_capacity(cases.len());
+    let mut missing = Vec::new();
     for (i, case) in cases.iter().enumerate() {
         let material_force = cache.force(material, &case.press, tolerance, &mut |s| progress(i, cases.len(), case, s));
-        // Keep what was computed even when a later press fails.
+        // Keep what was computed even when a later press fails; a press over an inclusion the
+        // continuum cannot resolve within its bounds is reported missing.
         let material_force = match material_force {
             Ok(f) => f,
+            Err(e) if !material.inclusions.is_empty() => {
+                missing.push(format!("{}: {e:#}", case.id));
+                continue;
+            }
             Err(e) => {
                 cache.save();
                 return Err(e);
@@ -130,6 +141,7 @@ pub fn evaluate(
             .last()
             .copied()
             .unwrap_or(0.0),
+        missing,
         cases: scores,
     })
 }
@@ -213,6 +225,9 @@ impl MaterialReport {
             100.0 * self.worst_training_error,
             100.0 * self.own_mesh_fem_worst_error
         );
+        for m in &self.missing {
+            s += &format!("missing (the continuum did not converge): {m}\n");
+        }
         s
     }
 }

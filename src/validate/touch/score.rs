@@ -154,7 +154,11 @@ pub fn responder(
             let model = MsmModel::new(grid, params, material.density)?;
             let fixed = scene_fixed_dofs(&grid);
             let mass = fixed.iter().enumerate().map(|(d, &f)| if f { 0.0 } else { model.masses[d / 3] }).collect();
-            let stiffness = GroupedStiffness::lattice(grid, params.topology());
+            let stiffness = GroupedStiffness::lattice_in(
+                grid,
+                params.topology(),
+                crate::mechanics::msm::inclusions::SpringRule::new(grid, material).as_ref(),
+            );
             Ok((Responder::new(grid, stiffness, &group_values(&params))?, mass))
         }
         Model::Fem(_) => {

@@ -113,6 +113,7 @@ impl FemDynamics {
             f.fill(0.0);
         }
         at.all(&self.rotations, &mut self.next_rotations, &mut self.f_components, self.parallel);
+        at.patched(self.model.patch(), &self.rotations, &mut self.f_components);
         for (n, out) in out.chunks_exact_mut(3).enumerate() {
             for c in 0..3 {
                 out[c] = -self.f_components[c][n];

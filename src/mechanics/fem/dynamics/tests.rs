@@ -186,3 +186,41 @@ fn newtons_corrections_solve_the_steps_equation_with_the_force_at_its_end() {
         assert!(residuals[1] > 10.0 * residuals[0], "trapezoidal {trapezoidal}: linearised {}", residuals[1]);
     }
 }
+
+/// The corotational FEM of a material with a lump: at small strain its force is the linear FEM's
+/// (the lump's elements included), and a rigid turn of the whole cube costs no force.
+#[test]
+fn the_corotated_lump_is_the_linear_one_at_small_strain_and_free_under_a_rigid_turn() {
+    let mut m = Material::object_b();
+    m.inclusions.push(crate::mechanics::inclusion::Inclusion {
+        centre: [0.05, 0.06, 0.07],
+        radius: 0.02,
+        stiffness: m.stiffness * 6.0,
+    });
+    let grid = Grid::new(5).unwrap();
+    let model = FemModel::new(grid, &m);
+    assert!(!model.patch().is_empty());
+    let mut linear = FemDynamics::new(model.clone(), m.density, Formulation::Linear, 0.0);
+    let mut corotated = FemDynamics::new(model, m.density, Formulation::Corotational, 0.0);
+    for (d, (a, b)) in linear.x.iter_mut().zip(corotated.x.iter_mut()).enumerate() {
+        let u = 1e-7 * (((d * 37) % 11) as f64 - 5.0);
+        *a += u;
+        *b += u;
+    }
+    let (fl, fc) = (linear.forces().to_vec(), corotated.forces().to_vec());
+    let scale = fl.iter().fold(0.0f64, |a, f| a.max(f.abs()));
+    let gap = fl.iter().zip(&fc).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+    assert!(gap < 1e-4 * scale, "{gap} of {scale}");
+    // Turned rigidly by 0.6 rad about the cube's centre.
+    let r = rotation(0.6);
+    let centred: Vec<f64> = corotated.rest.iter().map(|x| x - 0.05).collect();
+    for (x, t) in corotated.x.iter_mut().zip(rotate(&r, &centred, false)) {
+        *x = t + 0.05;
+    }
+    for _ in 0..20 {
+        corotated.forces();
+    }
+    let turned = corotated.forces().iter().fold(0.0f64, |a, f| a.max(f.abs()));
+    let stiff = corotated.model.stiffest_element() * 0.05;
+    assert!(turned < 1e-9 * stiff, "{turned} against {stiff}");
+}
