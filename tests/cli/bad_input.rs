@@ -38,6 +38,8 @@ fn bad_input_fails_cleanly_without_output() {
         (vec!["fem", "--object", "A", "--out", "/nonexistent-dir/x.json"], "cannot"),
         // A lump is read and checked whole, then refused where it is not modelled yet.
         (vec!["errors", "--material", lump, "--k1", "1", "--k2", "1", "--k3", "1"], "does not model inclusions yet"),
+        (vec!["validate", "--material", lump, "--nodes", "13"], "at most 12 nodes"),
+        (vec!["view", "--material", missing.to_str().expect("utf8")], "cannot read"),
         (vec!["fem", "--material", outside.to_str().expect("utf8"), "--out", o], "inclusion 1: its sphere"),
     ];
     for (args, needle) in cases {
