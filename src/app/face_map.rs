@@ -1,21 +1,21 @@
-//! The palpation map over the top face in the viewer: the probe's settled force at a grid of
-//! points (`tissue-sim palpate`'s map, [`crate::study::palpate`]), read at the model's top-face
-//! nodes for the colour overlay.
+//! The palpation map over a free face in the viewer: the probe's settled force at a grid of
+//! points (`tissue-sim palpate`'s map, [`crate::study::palpate`]), read at the model's nodes on
+//! that face for the colour overlay.
 
 use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
-use crate::study::palpate::PalpationMap;
+use crate::study::palpate::{Face, PalpationMap};
 
 /// Points per side of the viewer's map.
 pub const GRID: usize = 21;
 /// Depth of each press, metres.
 pub const DEPTH_M: f64 = 0.004;
 
-/// A palpation map of the top face and its force at the model's nodes.
+/// A palpation map of a face and its force at the model's nodes.
 #[derive(Debug, Clone)]
 pub struct FaceMap {
     /// The map.
     pub map: PalpationMap,
-    /// Its force at each node of the model on the top face (bilinear between the map's points,
+    /// Its force at each node of the model on the face (bilinear between the map's points,
     /// held beyond the outermost), `NaN` elsewhere, newtons.
     pub per_node: Vec<f32>,
     /// The force's range over the map, newtons.
@@ -27,10 +27,11 @@ pub struct FaceMap {
 }
 
 impl FaceMap {
-    /// `map` (of the top face, its points row by row) read at `grid`'s top-face nodes.
+    /// `map` (of a face, its points row by row) read at `grid`'s nodes on that face.
     pub fn new(map: PalpationMap, grid: &Grid) -> Self {
-        let per_node = at_nodes(&map.forces, map.grid, grid);
-        let contrast_per_node = at_nodes(&map.contrast, map.grid, grid);
+        let face = Face::parse(&map.face).unwrap_or(Face { axis: 2, high: true });
+        let per_node = at_nodes(&map.forces, map.grid, grid, face);
+        let contrast_per_node = at_nodes(&map.contrast, map.grid, grid, face);
         let range = |v: &[f64]| {
             let low = v.iter().copied().fold(f64::INFINITY, f64::min) as f32;
             [low, v.iter().copied().fold(f64::NEG_INFINITY, f64::max) as f32]
@@ -39,8 +40,9 @@ impl FaceMap {
     }
 }
 
-/// `values` at the `n` x `n` map's points read at `grid`'s top-face nodes (`NaN` elsewhere).
-fn at_nodes(values: &[f64], n: usize, grid: &Grid) -> Vec<f32> {
+/// `values` at the `n` x `n` map's points of `face` read at `grid`'s nodes on it (`NaN`
+/// elsewhere).
+fn at_nodes(values: &[f64], n: usize, grid: &Grid, face: Face) -> Vec<f32> {
     let at = |i: usize, j: usize| values[i.min(n - 1) + n * j.min(n - 1)];
     // The map's points lie in the middle of the cells of an n x n division of the face.
     let cell = |x: f64| {
@@ -48,15 +50,15 @@ fn at_nodes(values: &[f64], n: usize, grid: &Grid) -> Vec<f32> {
         let i = (u.floor() as usize).min(n.saturating_sub(2));
         (i, u - i as f64)
     };
-    let top = grid.n() - 1;
+    let (level, [u, v]) = (if face.high { grid.n() - 1 } else { 0 }, face.across());
     grid.positions()
         .iter()
         .enumerate()
         .map(|(node, p)| {
-            if grid.ijk(node)[2] != top {
+            if grid.ijk(node)[face.axis] != level {
                 return f32::NAN;
             }
-            let ((i, a), (j, b)) = (cell(p[0]), cell(p[1]));
+            let ((i, a), (j, b)) = (cell(p[u]), cell(p[v]));
             let f = (1.0 - a) * (1.0 - b) * at(i, j)
                 + a * (1.0 - b) * at(i + 1, j)
                 + (1.0 - a) * b * at(i, j + 1)
@@ -73,11 +75,11 @@ mod tests {
     use crate::study::palpate::{Face, Palpation};
 
     #[test]
-    fn the_map_is_read_at_the_top_face_nodes_only() {
+    fn the_map_is_read_at_its_faces_nodes_only() {
         let palpation = Palpation { face: Face::parse("+z").expect("the top"), radius: 0.015, depth: DEPTH_M, grid: 3 };
         // A force rising along x: 1, 2, 3 N at x = 1/6, 1/2, 5/6 of the side.
         let forces: Vec<f64> = (0..9).map(|k| 1.0 + (k % 3) as f64).collect();
-        let map = PalpationMap::new(&Material::object_a(), &palpation, forces.clone(), forces);
+        let map = PalpationMap::new(&Material::object_a(), &palpation, forces.clone(), forces.clone());
         let grid = Grid::new(4).expect("a grid");
         let face = FaceMap::new(map, &grid);
         assert_eq!(face.range, [1.0, 3.0]);
@@ -87,5 +89,14 @@ mod tests {
             assert!((a - b).abs() < 1e-5, "{top:?}");
         }
         assert!(face.per_node[grid.node(1, 1, 2)].is_nan());
+        // The -y face: across it x (inner) and z (outer), read at its nodes only.
+        let palpation = Palpation { face: Face::parse("-y").expect("a side"), radius: 0.015, depth: DEPTH_M, grid: 3 };
+        let map = PalpationMap::new(&Material::object_a(), &palpation, forces.clone(), forces);
+        let side = FaceMap::new(map, &grid);
+        let row: Vec<f32> = (0..4).map(|i| side.per_node[grid.node(i, 0, 1)]).collect();
+        for (a, b) in row.iter().zip([1.0, 1.5, 2.5, 3.0]) {
+            assert!((a - b).abs() < 1e-5, "{row:?}");
+        }
+        assert!(side.per_node[grid.node(1, 3, 1)].is_nan() && side.per_node[grid.node(1, 1, 3)].is_nan());
     }
 }

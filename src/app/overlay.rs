@@ -74,7 +74,7 @@ impl Overlay {
     }
 
     /// Recomputes the scalar, its range text, the surface mesh and the lines for `positions`;
-    /// with `map`, the scalar is the palpation map's force on the top face.
+    /// with `map`, the scalar is the palpation map's force on its face.
     pub fn update(
         &mut self,
         show: Show,
@@ -104,11 +104,11 @@ impl Overlay {
                 max = Some(1.0);
                 self.ends.iter_mut().for_each(String::clear);
                 if show.map_contrast {
-                    self.title = "contrast: force over the force without lumps (top face map)";
+                    self.title = "contrast: force over the force without lumps (palpation map)";
                     let _ = write!(self.ends[0], "{:+.1} %", 100.0 * high);
                     let _ = write!(self.ends[1], "{:+.1} %", 100.0 * low);
                 } else {
-                    self.title = "probe force (top face map)";
+                    self.title = "probe force (palpation map)";
                     let _ = write!(self.ends[0], "{high:.2} N");
                     let _ = write!(self.ends[1], "{low:.2} N");
                 }

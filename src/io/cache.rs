@@ -21,9 +21,13 @@ pub enum CacheEvent<'a> {
         /// The cache folder the answer will be kept in, or `None` where it lives in memory only.
         kept_in: Option<&'a Path>,
     },
-    /// A further part of the work starts, computed in memory and not kept (its progress counts
-    /// from 0 again): what it computes.
-    Part(&'a str),
+    /// A further part of the work starts (its progress counts from 0 again).
+    Part {
+        /// What it computes.
+        what: &'a str,
+        /// The cache folder it will be kept in, or `None` where it lives in memory only.
+        kept_in: Option<&'a Path>,
+    },
     /// This fraction of the work (0 to 1) is done; the callback's `false` stops the work.
     Progress(f64),
     /// One line for the user about the cache (a file refused, a folder that cannot keep the
@@ -235,11 +239,12 @@ impl StderrReport {
                 let kept = kept_in.map_or_else(|| "not kept".to_owned(), |d| format!("kept in {}", d.display()));
                 Some(format!("computing {} (about {}, {kept})", self.what, self.about))
             }
-            CacheEvent::Part(what) => {
+            CacheEvent::Part { what, kept_in } => {
                 self.started = Some(Instant::now());
                 self.next_tenth = 1;
                 what.clone_into(&mut self.part);
-                Some(format!("computing {what} (not kept)"))
+                let kept = kept_in.map_or_else(|| "not kept".to_owned(), |d| format!("kept in {}", d.display()));
+                Some(format!("computing {what} ({kept})"))
             }
             CacheEvent::Progress(f) => {
                 let tenth = (f.clamp(0.0, 1.0) * 10.0 + 1e-9).floor() as u32;

@@ -9,7 +9,7 @@ use crate::app::state::{Request, Shown, ViewSettings};
 pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, requests: &mut Vec<Request>) {
     if !shown.inclusions.is_empty() {
         ui.label(format!(
-            "The probe feels the material file's {} inclusion(s); the model shown steps the tissue around them.",
+            "The probe feels the material file's {} inclusion(s); the model shown takes them too.",
             shown.inclusions.len()
         ));
     }
@@ -99,19 +99,19 @@ fn range(ui: &mut egui::Ui, label: &str, value: &mut [f64; 2], limits: [f64; 2],
     });
 }
 
-/// The palpation map of the top face: compute it, show it or not, what it found.
+/// The palpation map of the face last pressed: compute it, show it or not, what it found.
 fn map_row(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, requests: &mut Vec<Request>) {
     let hidden = shown.exercise.as_ref().is_some_and(|e| e.mark.is_none());
     ui.horizontal_wrapped(|ui| {
         let map = ui
-            .add_enabled(!hidden, egui::Button::new("Map the top face"))
+            .add_enabled(!hidden, egui::Button::new("Map the face"))
             .on_hover_text(
-                "The probe (its radius now) pressed 4 mm at 21 x 21 points of the top face: its force as the top \
-                 face's colours (tissue-sim palpate's map)",
+                "The probe (its radius now) pressed 4 mm at 21 x 21 points of the face it last pressed (the top face \
+                 before any press): its force as the face's colours (tissue-sim palpate's map)",
             )
             .on_disabled_hover_text("it would show the hidden lump: mark it first");
         if map.clicked() {
-            requests.push(Request::MapTopFace);
+            requests.push(Request::MapFace);
         }
         ui.checkbox(&mut settings.show_map, "show the map");
         ui.checkbox(&mut settings.map_contrast, "as contrast");
@@ -119,14 +119,15 @@ fn map_row(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reques
     match &shown.face_map {
         Some(Ok(m)) => {
             let [low, high] = m.range;
-            let mut line = format!("map: {low:.2} to {high:.2} N");
+            let mut line = format!("map of the {} face: {low:.2} to {high:.2} N", m.map.face);
             if let Some((peak, at)) = m.map.peak().filter(|_| !m.map.inclusions.is_empty()) {
                 line.push_str(&format!(
-                    "; largest contrast against the tissue without its lumps {:+.1} % at ({:.0}, {:.0}) mm, beyond 7 % \
-                     at {} of {} points",
+                    "; largest contrast against the tissue without its lumps {:+.1} % at ({:.0}, {:.0}, {:.0}) mm, \
+                     beyond 7 % at {} of {} points",
                     100.0 * peak,
                     at[0] * 1e3,
                     at[1] * 1e3,
+                    at[2] * 1e3,
                     m.map.felt(),
                     m.map.points.len()
                 ));

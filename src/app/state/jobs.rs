@@ -29,6 +29,21 @@ pub(super) enum ComplianceMessage {
     Done(Result<(MaterialSurface, Arc<SurfaceCompliance>, Option<[f64; 2]>), String>),
 }
 
+/// The free face a probe centred at `centre` (outside the cube) pressed: the one it stands
+/// farthest out of (the top face where it is over none).
+fn pressed_face(centre: [f64; 3]) -> Face {
+    let l = crate::mechanics::grid::CUBE_SIDE_M;
+    let mut best = (0.0, Face { axis: 2, high: true });
+    for axis in 0..3 {
+        for (out, high) in [(centre[axis] - l, true), (-centre[axis], false)] {
+            if out > best.0 && (axis != 2 || high) {
+                best = (out, Face { axis, high });
+            }
+        }
+    }
+    best.1
+}
+
 /// What the validation job reports: the touch benchmark's scores, then, for a material with
 /// inclusions, the model against the material with them.
 #[derive(Debug)]
@@ -51,6 +66,8 @@ impl ViewerState {
             return;
         }
         let material = self.shown.felt_material();
+        // A hidden lump's correction lives in memory only (random, seldom met again).
+        let keep_lump = self.shown.exercise.is_none();
         // Find the lump: what the probe can feel of it, pressed over its centre.
         let over = self.shown.exercise.as_ref().map(|e| {
             let c = e.lump.inclusion.centre;
@@ -65,25 +82,26 @@ impl ViewerState {
             move |ctx| {
                 let dir = crate::io::cache_dir();
                 // Stopped within a batch when the viewer closes or the material changes.
-                let r = MaterialSurface::with_background(&material, dir.as_deref(), &mut |event| match event {
-                    CacheEvent::Progress(f) => {
-                        ctx.send(ComplianceMessage::Progress(f));
-                        !ctx.cancelled()
-                    }
-                    // A cache file refused, or the answer not kept: said where the viewer was started.
-                    CacheEvent::Warning(line) => {
-                        eprintln!("{line}");
-                        true
-                    }
-                    CacheEvent::Computing { .. } => {
-                        ctx.send(ComplianceMessage::Stage("the material's surface compliance".into()));
-                        true
-                    }
-                    CacheEvent::Part(what) => {
-                        ctx.send(ComplianceMessage::Stage(what.into()));
-                        true
-                    }
-                });
+                let r =
+                    MaterialSurface::with_background(&material, dir.as_deref(), keep_lump, &mut |event| match event {
+                        CacheEvent::Progress(f) => {
+                            ctx.send(ComplianceMessage::Progress(f));
+                            !ctx.cancelled()
+                        }
+                        // A cache file refused, or the answer not kept: said where the viewer was started.
+                        CacheEvent::Warning(line) => {
+                            eprintln!("{line}");
+                            true
+                        }
+                        CacheEvent::Computing { .. } => {
+                            ctx.send(ComplianceMessage::Stage("the material's surface compliance".into()));
+                            true
+                        }
+                        CacheEvent::Part { what, .. } => {
+                            ctx.send(ComplianceMessage::Stage(what.into()));
+                            true
+                        }
+                    });
                 let r = r.map_err(|e| format!("{e:#}")).and_then(|(background, surface)| {
                     let felt = match over {
                         Some((centre, radius)) => {
@@ -274,7 +292,7 @@ impl ViewerState {
         };
         let material = self.shown.felt_material();
         let palpation = Palpation {
-            face: Face::parse("+z").unwrap_or(Face { axis: 2, high: true }),
+            face: self.shown.last_probe.map_or(Face { axis: 2, high: true }, |(centre, _)| pressed_face(centre)),
             radius: self.settings.probe_radius_mm * 1e-3,
             depth: crate::app::face_map::DEPTH_M,
             grid: crate::app::face_map::GRID,

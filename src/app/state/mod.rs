@@ -81,7 +81,7 @@ pub enum Request {
     /// End the exercise: the lump goes.
     EndExercise,
     /// The palpation map of the top face, computed in the background.
-    MapTopFace,
+    MapFace,
 }
 
 /// The viewer's state.
@@ -296,7 +296,7 @@ impl ViewerState {
                     self.start_compliance();
                 }
             }
-            Request::MapTopFace => self.start_map(),
+            Request::MapFace => self.start_map(),
         }
     }
 

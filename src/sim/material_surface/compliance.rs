@@ -123,6 +123,27 @@ impl SurfaceCompliance {
         Ok(self)
     }
 
+    /// The compliance with `lump` as its inclusions' correction (one computed for this lattice,
+    /// [`LumpCorrection::compute`], or read from its file).
+    pub fn with_lump(mut self, lump: LumpCorrection) -> Self {
+        self.lump = Some(lump);
+        self
+    }
+
+    /// Its lattice's face divisions per axis and surface nodes.
+    pub fn lattice_size(&self) -> (usize, usize) {
+        (self.lattice.divisions, self.lattice.len())
+    }
+
+    /// The inclusions' correction of `material` on this compliance's lattice.
+    pub fn lump_of(
+        &self,
+        material: &Material,
+        progress: &mut dyn FnMut(f64) -> bool,
+    ) -> Result<LumpCorrection, ComplianceError> {
+        LumpCorrection::compute(&self.lattice, material, progress)
+    }
+
     /// The inclusions' correction, where the material has inclusions.
     pub fn lump(&self) -> Option<&LumpCorrection> {
         self.lump.as_ref()

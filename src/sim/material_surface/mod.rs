@@ -219,17 +219,20 @@ impl MaterialSurface {
         dir: Option<&Path>,
         report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
     ) -> anyhow::Result<Self> {
-        Ok(Self::with_background(material, dir, report)?.1)
+        Ok(Self::with_background(material, dir, true, report)?.1)
     }
 
     /// [`MaterialSurface::load_or_compute`] with the compliance of the material's background
-    /// beside it (the same where it has no inclusions, [`with_background`]).
+    /// beside it (the same where it has no inclusions, [`with_background`]); the inclusions'
+    /// correction kept in `dir` too where `keep_lump` (a lump of a file), or in memory only (a
+    /// random lump of an exercise, seldom met again).
     pub fn with_background(
         material: &Material,
         dir: Option<&Path>,
+        keep_lump: bool,
         report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
     ) -> anyhow::Result<(Arc<SurfaceCompliance>, Self)> {
-        let (background, compliance) = with_background(material, dir, report)?;
+        let (background, compliance) = with_background_as(material, dir, keep_lump, report)?;
         // The background's modes: the inclusions change the slow modes little, and the force
         // held still is the compliance's, inclusions and all.
         let modes = Arc::new(ModalBasis::of_material(&material.background()).map_err(anyhow::Error::msg)?);
@@ -270,8 +273,9 @@ pub fn stderr_report() -> StderrReport {
 /// - a line where the write after the work fails: the computed answer is used all the same.
 ///
 /// A material with inclusions: its background's compliance so (the file is the background's),
-/// then the change its inclusions make ([`compliance::lump`], seconds), computed in memory
-/// ([`CacheEvent::Part`] and its progress).
+/// then the change its inclusions make ([`compliance::lump`], seconds), so too in a file of its
+/// own keyed by the whole material ([`compliance::lump::file`]; [`CacheEvent::Part`] and its
+/// progress where it is computed).
 ///
 /// The errors are the computation's only: never the cache's.
 pub fn load_or_compute(
@@ -289,13 +293,69 @@ pub fn with_background(
     dir: Option<&Path>,
     report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
 ) -> anyhow::Result<(Arc<SurfaceCompliance>, Arc<SurfaceCompliance>)> {
+    with_background_as(material, dir, true, report)
+}
+
+/// [`with_background`], the inclusions' correction kept in `dir` only where `keep_lump`.
+fn with_background_as(
+    material: &Material,
+    dir: Option<&Path>,
+    keep_lump: bool,
+    report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
+) -> anyhow::Result<(Arc<SurfaceCompliance>, Arc<SurfaceCompliance>)> {
     let background = load_or_compute_background(&material.background(), dir, report)?;
     if material.inclusions.is_empty() {
         return Ok((Arc::clone(&background), background));
     }
-    report(CacheEvent::Part("the change the inclusions make"));
-    let lumpy = (*background).clone().with_inclusions(material, &mut |f| report(CacheEvent::Progress(f)))?;
-    Ok((background, Arc::new(lumpy)))
+    let lump = load_or_compute_lump(material, &background, dir.filter(|_| keep_lump), report)?;
+    Ok((Arc::clone(&background), Arc::new((*background).clone().with_lump(lump))))
+}
+
+/// The change `material`'s inclusions make to `background` (its background's compliance):
+/// from its file in `dir` where one is kept for this material, else computed (and kept there).
+fn load_or_compute_lump(
+    material: &Material,
+    background: &SurfaceCompliance,
+    dir: Option<&Path>,
+    report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
+) -> anyhow::Result<compliance::lump::LumpCorrection> {
+    use compliance::lump::LumpCorrection;
+    const WHAT: &str = "the change the inclusions make";
+    let (divisions, nodes) = background.lattice_size();
+    let name = format!(
+        "lump-correction-{:016x}.bin",
+        crate::io::cache_key((compliance::lump::file::LUMP_METHOD_VERSION, divisions), material.key().iter())
+    );
+    let kept = dir.map(|d| KeptFile::new(d, &name, WHAT));
+    if let Some(kept) = &kept {
+        match kept.read(MAX_FILE_BYTES) {
+            Ok(Some(bytes)) => match LumpCorrection::from_bytes(&bytes, material, divisions, nodes) {
+                Ok(found) => return Ok(found),
+                Err(why) => {
+                    report(CacheEvent::Warning(&kept.refused(&why.to_string())));
+                }
+            },
+            Ok(None) => {}
+            Err(line) => {
+                report(CacheEvent::Warning(&line));
+            }
+        }
+    }
+    let keep = kept.filter(|k| match k.check_writable() {
+        Ok(()) => true,
+        Err(line) => {
+            report(CacheEvent::Warning(&line));
+            false
+        }
+    });
+    report(CacheEvent::Part { what: WHAT, kept_in: keep.as_ref().map(KeptFile::dir) });
+    let lump = background.lump_of(material, &mut |f| report(CacheEvent::Progress(f)))?;
+    if let Some(keep) = &keep
+        && let Err(line) = keep.write(&lump.to_bytes(material, divisions))
+    {
+        report(CacheEvent::Warning(&line));
+    }
+    Ok(lump)
 }
 
 /// [`load_or_compute`] for a material without inclusions.

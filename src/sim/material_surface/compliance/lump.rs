@@ -10,6 +10,9 @@
 //! surface nodes is `X_Q (I + D G)^-1 D X_Q'`, `X_Q` the solutions read at the lattice's surface
 //! nodes by the mesh's trilinear shape functions. Far from the inclusions (beyond [`REACH_M`])
 //! the correction is left out: there the lump changes the force by a few parts in a thousand.
+//! [`file`](mod@file): the correction kept in the cache folder.
+
+pub mod file;
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
