@@ -152,6 +152,20 @@ pub fn add_product_components(patch: &[PatchedElement], u: &[Vec<f64>; 3], out: 
     }
 }
 
+/// [`add_product_components`] on `f32` arrays, each element's product summed in `f64`.
+/// Allocates nothing.
+pub fn add_product_components_f32(patch: &[PatchedElement], u: &[Vec<f32>; 3], out: &mut [Vec<f32>; 3]) {
+    for e in patch {
+        let ue: [f64; 24] = std::array::from_fn(|l| f64::from(u[l % 3][e.nodes[l / 3]]));
+        for (a, &p) in e.nodes.iter().enumerate() {
+            for c in 0..3 {
+                let row = 3 * a + c;
+                out[c][p] += (0..24).map(|l| e.delta[(row, l)] * ue[l]).sum::<f64>() as f32;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
