@@ -326,36 +326,16 @@ fn load_or_compute_lump(
         "lump-correction-{:016x}.bin",
         crate::io::cache_key((compliance::lump::file::LUMP_METHOD_VERSION, divisions), material.key().iter())
     );
-    let kept = dir.map(|d| KeptFile::new(d, &name, WHAT));
-    if let Some(kept) = &kept {
-        match kept.read(MAX_FILE_BYTES) {
-            Ok(Some(bytes)) => match LumpCorrection::from_bytes(&bytes, material, divisions, nodes) {
-                Ok(found) => return Ok(found),
-                Err(why) => {
-                    report(CacheEvent::Warning(&kept.refused(&why.to_string())));
-                }
-            },
-            Ok(None) => {}
-            Err(line) => {
-                report(CacheEvent::Warning(&line));
-            }
-        }
-    }
-    let keep = kept.filter(|k| match k.check_writable() {
-        Ok(()) => true,
-        Err(line) => {
-            report(CacheEvent::Warning(&line));
-            false
-        }
-    });
-    report(CacheEvent::Part { what: WHAT, kept_in: keep.as_ref().map(KeptFile::dir) });
-    let lump = background.lump_of(material, &mut |f| report(CacheEvent::Progress(f)))?;
-    if let Some(keep) = &keep
-        && let Err(line) = keep.write(&lump.to_bytes(material, divisions))
-    {
-        report(CacheEvent::Warning(&line));
-    }
-    Ok(lump)
+    kept_or_computed(
+        dir.map(|d| KeptFile::new(d, &name, WHAT)),
+        report,
+        |bytes| LumpCorrection::from_bytes(bytes, material, divisions, nodes),
+        |kept_in, report| {
+            report(CacheEvent::Part { what: WHAT, kept_in });
+            Ok(background.lump_of(material, &mut |f| report(CacheEvent::Progress(f)))?)
+        },
+        |lump| lump.to_bytes(material, divisions),
+    )
 }
 
 /// [`load_or_compute`] for a material without inclusions.
@@ -364,11 +344,34 @@ fn load_or_compute_background(
     dir: Option<&Path>,
     report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
 ) -> anyhow::Result<Arc<SurfaceCompliance>> {
-    let kept = dir.map(|d| KeptFile::new(d, &file_name(material), KEPT));
+    let computed = kept_or_computed(
+        dir.map(|d| KeptFile::new(d, &file_name(material), KEPT)),
+        report,
+        |bytes| SurfaceCompliance::from_bytes(bytes, material, DEFAULT_DIVISIONS),
+        |kept_in, report| {
+            report(CacheEvent::Computing { kept_in });
+            Ok(SurfaceCompliance::compute(material, DEFAULT_DIVISIONS, &mut |f| report(CacheEvent::Progress(f)))?)
+        },
+        |computed| computed.to_bytes(material),
+    )?;
+    Ok(Arc::new(computed))
+}
+
+/// The answer `kept` holds where its file proves to be it (`read`), else `compute`d (told the
+/// folder it will be kept in, checked writable before the work) and written there. A file
+/// refused, a folder that cannot keep it or a write that fails is one line through `report`,
+/// never an error: the errors are the computation's only.
+fn kept_or_computed<T>(
+    kept: Option<KeptFile>,
+    report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
+    read: impl FnOnce(&[u8]) -> Result<T, compliance::file::FileError>,
+    compute: impl FnOnce(Option<&Path>, &mut dyn FnMut(CacheEvent<'_>) -> bool) -> anyhow::Result<T>,
+    to_bytes: impl FnOnce(&T) -> Vec<u8>,
+) -> anyhow::Result<T> {
     if let Some(kept) = &kept {
         match kept.read(MAX_FILE_BYTES) {
-            Ok(Some(bytes)) => match SurfaceCompliance::from_bytes(&bytes, material, DEFAULT_DIVISIONS) {
-                Ok(found) => return Ok(Arc::new(found)),
+            Ok(Some(bytes)) => match read(&bytes) {
+                Ok(found) => return Ok(found),
                 Err(why) => {
                     report(CacheEvent::Warning(&kept.refused(&why.to_string())));
                 }
@@ -387,12 +390,11 @@ fn load_or_compute_background(
             false
         }
     });
-    report(CacheEvent::Computing { kept_in: keep.as_ref().map(KeptFile::dir) });
-    let computed = SurfaceCompliance::compute(material, DEFAULT_DIVISIONS, &mut |f| report(CacheEvent::Progress(f)))?;
+    let computed = compute(keep.as_ref().map(KeptFile::dir), report)?;
     if let Some(keep) = &keep
-        && let Err(line) = keep.write(&computed.to_bytes(material))
+        && let Err(line) = keep.write(&to_bytes(&computed))
     {
         report(CacheEvent::Warning(&line));
     }
-    Ok(Arc::new(computed))
+    Ok(computed)
 }
