@@ -3,9 +3,9 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use tissue_sim::mechanics::cases::LoadCase;
-use tissue_sim::mechanics::grid::Grid;
-use tissue_sim::mechanics::msm::{Dynamics, MsmModel, MsmParams};
+use tissue_core::mechanics::cases::LoadCase;
+use tissue_core::mechanics::grid::Grid;
+use tissue_core::mechanics::msm::{Dynamics, MsmModel, MsmParams};
 
 struct Counting;
 
@@ -90,7 +90,7 @@ fn explicit_and_implicit_steps_do_not_allocate() {
     assert_eq!(single_precision_steps(&model, &mut dynamics), 0, "allocations in 100 f32 symplectic steps");
     // The interactive simulation over the Tissue trait, with each tool and the guard's good-state
     // copies: allocation-free too. (In the same test: the counter is global to the binary.)
-    use tissue_sim::sim::{Integrator, Simulation, Tool};
+    use tissue_core::sim::{Integrator, Simulation, Tool};
     let mut sim = Simulation::new(model, Integrator::Symplectic, 1e-5, Some(&LoadCase::clamped(&grid, "A", 3, 0.0)));
     let tools = [
         Tool::Drag { node: 511, target: [0.11, 0.1, 0.105] },
@@ -113,17 +113,17 @@ fn explicit_and_implicit_steps_do_not_allocate() {
     // The probe on the material's surface compliance (a coarse one here: 10 divisions) with the
     // material's slow modes, the sphere moving every step: a few contact solves each step (the
     // lag's fixed point) and the modes advanced, in preallocated memory.
-    let material = tissue_sim::mechanics::material::Material::object_a();
+    let material = tissue_core::mechanics::material::Material::object_a();
     let compliance =
-        tissue_sim::sim::material_surface::compliance::SurfaceCompliance::compute(&material, 10, &mut |_| true)
+        tissue_core::sim::material_surface::compliance::SurfaceCompliance::compute(&material, 10, &mut |_| true)
             .expect("c");
-    let surface = tissue_sim::sim::material_surface::MaterialSurface {
+    let surface = tissue_core::sim::material_surface::MaterialSurface {
         compliance: std::sync::Arc::new(compliance),
         modes: std::sync::Arc::new(
-            tissue_sim::sim::material_surface::modal_lag::ModalBasis::of_material(&material).expect("modes"),
+            tissue_core::sim::material_surface::modal_lag::ModalBasis::of_material(&material).expect("modes"),
         ),
     };
-    let probe = tissue_sim::sim::material_surface::SurfaceProbe::on(&surface, grid, Some(0.2));
+    let probe = tissue_core::sim::material_surface::SurfaceProbe::on(&surface, grid, Some(0.2));
     assert!(probe.is_dynamic());
     sim.set_surface_probe(Some(probe));
     let at = |i: usize| Tool::Probe { centre: [0.03 + 2e-4 * i as f64, 0.05, 0.1 + 0.015 - 0.004], radius: 0.015 };
@@ -145,8 +145,8 @@ fn explicit_and_implicit_steps_do_not_allocate() {
 
 /// The drag inside Newmark's solve: the anchor's correction prepared in preallocated memory
 /// when a drag starts on a node, Newton's corrections by conjugate gradients on the factor.
-fn drag_inside_newmarks_solve(sim: &mut tissue_sim::sim::Simulation) {
-    use tissue_sim::sim::{Integrator, Tool};
+fn drag_inside_newmarks_solve(sim: &mut tissue_core::sim::Simulation) {
+    use tissue_core::sim::{Integrator, Tool};
     sim.try_set_integrator(Some(Integrator::Newmark), 1e-3).expect("Newmark at 1 ms");
     sim.tool = Tool::None;
     sim.step().expect("the first Newmark step builds the factor");
@@ -171,13 +171,13 @@ fn drag_inside_newmarks_solve(sim: &mut tissue_sim::sim::Simulation) {
 /// times.) Counted on the stepping thread: the pool's other worker, stealing the splits, once
 /// allocated 3 times in its own bookkeeping (in 1 of 6 runs, at one step of 200).
 fn fem_steps_on_the_physics_pool() {
-    use tissue_sim::mechanics::fem::FemModel;
-    use tissue_sim::mechanics::fem::dynamics::{FemDynamics, Formulation};
-    use tissue_sim::mechanics::parallel::on_pool;
+    use tissue_core::mechanics::fem::FemModel;
+    use tissue_core::mechanics::fem::dynamics::{FemDynamics, Formulation};
+    use tissue_core::mechanics::parallel::on_pool;
     // With a lump in it: its elements' changes applied in the steps too.
-    let mut material = tissue_sim::mechanics::material::Material::object_a();
+    let mut material = tissue_core::mechanics::material::Material::object_a();
     let stiffness = material.stiffness * 5.0;
-    material.inclusions.push(tissue_sim::mechanics::inclusion::Inclusion {
+    material.inclusions.push(tissue_core::mechanics::inclusion::Inclusion {
         centre: [0.05, 0.05, 0.08],
         radius: 0.008,
         stiffness,

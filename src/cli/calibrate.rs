@@ -18,7 +18,7 @@ pub struct CalibrateArgs {
     #[command(flatten)]
     pub object: ObjectArgs,
     /// Search method.
-    #[arg(long, value_enum, default_value = "hybrid")]
+    #[arg(long, value_parser = crate::cli::values::parser::<Method>(), default_value = "hybrid")]
     pub method: Method,
     /// Random seed (same seed and settings: same result).
     #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
@@ -37,14 +37,14 @@ pub struct CalibrateArgs {
     pub crossover: f64,
     /// Cost: static equilibria (the paper's), or the state 20 ms after a step load, which identifies
     /// damping (on the paper's cases only).
-    #[arg(long, value_enum, default_value = "static")]
+    #[arg(long, value_parser = crate::cli::values::parser::<CostMode>(), default_value = "static")]
     pub cost: CostMode,
     /// MSM topology: the paper's axis springs, axis + face-diagonal (shear) springs, or the hex-element lattice.
-    #[arg(long, value_enum, default_value = "axis")]
+    #[arg(long, value_parser = crate::cli::values::parser::<Topology>(), default_value = "axis")]
     pub model: Topology,
     /// Training cases: the paper's nine face loads, the touch benchmark's training set, both, or
     /// the material's training presses (refused on a grid where no press touches a node).
-    #[arg(long, value_enum, default_value = "paper")]
+    #[arg(long, value_parser = crate::cli::values::parser::<CaseSet>(), default_value = "paper")]
     pub cases: CaseSet,
     /// Override a gene's search bounds, e.g. `--bound k1=100:5000` (repeatable).
     #[arg(long = "bound", value_name = "GENE=LO:HI")]

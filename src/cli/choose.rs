@@ -51,7 +51,7 @@ pub struct ChooseArgs {
     #[arg(long, default_value = "A")]
     pub object: Object,
     /// Which error the budget bounds.
-    #[arg(long, value_enum, default_value = "max")]
+    #[arg(long, value_parser = crate::cli::values::parser::<Metric>(), default_value = "max")]
     pub metric: Metric,
     /// A chart.csv written by `tissue-sim chart` (otherwise the chart of this object is computed, about a minute).
     #[arg(long, value_name = "FILE.csv")]

@@ -26,7 +26,7 @@ pub struct DynamicsArgs {
     #[arg(long, value_parser = ["hex", "shear", "axis", "fem-linear", "fem-corotational"])]
     pub model: Option<String>,
     /// Integrator; default: the viewer's automatic choice for --dt (its dynamic budget).
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = crate::cli::values::parser::<Integrator>())]
     pub integrator: Option<Integrator>,
     /// Time step, s (default: the viewer's, 1e-4).
     #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]

@@ -20,7 +20,7 @@ pub struct FemArgs {
     #[command(flatten)]
     pub object: ObjectArgs,
     /// Boundary conditions.
-    #[arg(long, value_enum, default_value = "clamped")]
+    #[arg(long, value_parser = crate::cli::values::parser::<Bc>(), default_value = "clamped")]
     pub bc: Bc,
     #[command(flatten)]
     pub grid: GridArgs,

@@ -25,10 +25,10 @@ pub struct RenderArgs {
     #[arg(long)]
     pub case: Option<String>,
     /// Colour map: none, displacement magnitude, or MSM-vs-FEM error.
-    #[arg(long, value_enum, default_value = "displacement")]
+    #[arg(long, value_parser = crate::cli::values::parser::<ColourMode>(), default_value = "displacement")]
     pub colour: ColourMode,
     /// MSM: the default hex-element tissue, the shear-spring lattice or the paper's axis springs.
-    #[arg(long, value_enum, default_value = "hex")]
+    #[arg(long, value_parser = crate::cli::values::parser::<Topology>(), default_value = "hex")]
     pub model: Topology,
     /// Displacement magnification of the drawn shape.
     #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]

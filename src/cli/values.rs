@@ -1,4 +1,4 @@
-//! The core enums' names on the command line: [`clap::ValueEnum`] for each, so that clap stays in
+//! The core enums' names on the command line ([`Named`], read by [`parser`]), so that clap stays in
 //! the command-line layer.
 
 use crate::calibrate::{CaseSet, CostMode, Method};
@@ -10,23 +10,34 @@ use crate::render::scene::ColourMode;
 use crate::sim::Integrator;
 use crate::study::choose::Metric;
 
-/// Implements [`clap::ValueEnum`] for a core enum, so that clap stays in the command-line layer:
-/// each variant with its command-line name and its help (the variant's doc, as clap's derive
-/// showed it).
+/// A core enum's command-line names: each variant with its name and its help (the variant's doc,
+/// as clap's derive showed it). The enums live below the command line, so clap's own trait cannot
+/// be implemented for them here; [`parser`] gives clap their values.
+pub(crate) trait Named: Sized + Clone + Send + Sync + 'static {
+    /// Every variant, its name and its help.
+    fn values() -> &'static [(Self, &'static str, &'static str)];
+}
+
 macro_rules! value_enum {
     ($ty:ident { $($variant:ident => $name:literal, $help:literal;)+ }) => {
-        impl clap::ValueEnum for $ty {
-            fn value_variants<'a>() -> &'a [Self] {
-                &[$($ty::$variant),+]
-            }
-
-            fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-                Some(match self {
-                    $($ty::$variant => clap::builder::PossibleValue::new($name).help($help),)+
-                })
+        impl Named for $ty {
+            fn values() -> &'static [(Self, &'static str, &'static str)] {
+                &[$(($ty::$variant, $name, $help)),+]
             }
         }
     };
+}
+
+/// The parser of a [`Named`] enum's values, which `--help` lists with their help.
+pub(crate) fn parser<T: Named>() -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(T::values().iter().map(|(_, name, help)| PossibleValue::new(*name).help(*help))).map(
+        |s: String| {
+            let values = T::values();
+            // The parser above took only these names.
+            values.iter().find(|(_, name, _)| *name == s).unwrap_or(&values[0]).0.clone()
+        },
+    )
 }
 
 value_enum!(Formulation {
@@ -85,7 +96,7 @@ value_enum!(Metric {
 
 #[cfg(test)]
 mod tests {
-    use clap::{CommandFactory as _, ValueEnum};
+    use clap::CommandFactory as _;
 
     use super::*;
     use crate::cli::Cli;
@@ -93,11 +104,10 @@ mod tests {
     /// Command-line names are those of the files (`name()`) and of serde.
     #[test]
     fn value_names_match_the_core_names() {
-        fn check<T: ValueEnum + serde::Serialize>(name: impl Fn(&T) -> String) {
-            for v in T::value_variants() {
-                let value = v.to_possible_value().expect("not skipped");
-                assert_eq!(value.get_name(), name(v));
-                assert_eq!(serde_json::to_value(v).expect("serialises"), value.get_name());
+        fn check<T: Named + serde::Serialize>(name: impl Fn(&T) -> String) {
+            for (v, value, _) in T::values() {
+                assert_eq!(*value, name(v));
+                assert_eq!(serde_json::to_value(v).expect("serialises"), *value);
             }
         }
         check::<Formulation>(|v| v.name().into());
@@ -108,7 +118,7 @@ mod tests {
         check::<CostMode>(|v| format!("{v:?}").to_lowercase());
         check::<ColourMode>(|v| format!("{v:?}").to_lowercase());
         check::<Compute>(|v| v.name().into());
-        assert_eq!(Metric::value_variants().len(), 2);
+        assert_eq!(Metric::values().len(), 2);
         Cli::command().debug_assert();
     }
 }

@@ -18,7 +18,7 @@ pub struct ViewArgs {
     #[arg(long, value_parser = parse_model)]
     pub model: Option<crate::sim::Model>,
     /// Where the model's steps are computed.
-    #[arg(long, value_enum, default_value = "cpu")]
+    #[arg(long, value_parser = crate::cli::values::parser::<crate::gpu::Compute>(), default_value = "cpu")]
     pub compute: crate::gpu::Compute,
     /// Start with the probe pressed DEPTH into the top face at (X, Y), metres (for a
     /// screenshot): X and Y in 0..0.1, DEPTH in 0..0.02.

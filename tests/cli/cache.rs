@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use tissue_sim::mechanics::material::Material;
-use tissue_sim::sim::material_surface::compliance::{DEFAULT_DIVISIONS, SurfaceCompliance};
-use tissue_sim::sim::material_surface::file_name;
+use tissue_core::mechanics::material::Material;
+use tissue_core::sim::material_surface::compliance::{DEFAULT_DIVISIONS, SurfaceCompliance};
+use tissue_core::sim::material_surface::file_name;
 
 use crate::*;
 
@@ -63,7 +63,7 @@ fn cache_lines(err: &str) -> Vec<&str> {
 /// Copies `material`'s surface compliance into `folder` from the user's cache folder where a
 /// regular file there proves to be it; whether it did.
 fn copy_good(material: &Material, folder: &Path) -> bool {
-    let Some(from) = tissue_sim::io::cache_dir().map(|d| d.join(file_name(material))) else { return false };
+    let Some(from) = tissue_core::io::cache_dir().map(|d| d.join(file_name(material))) else { return false };
     if !std::fs::metadata(&from).is_ok_and(|m| m.is_file()) {
         return false;
     }

@@ -18,7 +18,7 @@ fn chart_then_choose_round_trip_and_bad_budgets() {
     let header = csv.lines().next().expect("header");
     assert!(header.contains("avg_err_pct") && header.contains("force_err_pct"), "{header}");
     // Touch force errors at the viewer's 8^3 scene only.
-    let points = tissue_sim::study::read_chart_csv(&out).expect("reads back");
+    let points = tissue_studies::study::read_chart_csv(&out).expect("reads back");
     assert!(points.iter().all(|p| (p.n == 8) != p.force_err_pct.is_nan()), "{csv}");
     // Dynamic errors too, and the cost per simulated second is the step's time over its step.
     assert!(points.iter().all(|p| (p.n == 8) != p.dyn_err_pct.is_nan() && (p.n == 8) != p.period_err_pct.is_nan()));

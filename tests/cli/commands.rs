@@ -22,9 +22,9 @@ fn fem_writes_the_spec_format_and_reads_back() {
     assert!(v["cases"][0]["force_N"].is_number());
     assert!(v["cases"][0]["displacements"][511][0].is_number());
     // Same numbers as the library computes.
-    let grid = tissue_sim::mechanics::grid::Grid::paper();
-    let cases = tissue_sim::mechanics::cases::benchmark_cases(&grid, "A", tissue_sim::mechanics::cases::Bc::Clamped);
-    let sols = tissue_sim::mechanics::fem::FemModel::new(grid, &tissue_sim::mechanics::material::Material::object_a())
+    let grid = tissue_core::mechanics::grid::Grid::paper();
+    let cases = tissue_core::mechanics::cases::benchmark_cases(&grid, "A", tissue_core::mechanics::cases::Bc::Clamped);
+    let sols = tissue_core::mechanics::fem::FemModel::new(grid, &tissue_core::mechanics::material::Material::object_a())
         .solve_cases(&cases)
         .expect("solve");
     assert!(file.cases[4].displacements == sols[4].displacements, "JSON does not round-trip exactly");

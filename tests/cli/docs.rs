@@ -129,7 +129,7 @@ fn the_script_example_is_the_shipped_file() {
     assert_eq!(scripts.len(), 1, "one script example");
     let shipped = std::fs::read_to_string(root().join("assets/examples/interaction.json")).expect("example");
     assert_eq!(scripts[0], shipped, "README's script is assets/examples/interaction.json (which it runs)");
-    let script: tissue_sim::study::script::Script = serde_json::from_str(&shipped).expect("a valid script");
+    let script: tissue_studies::study::script::Script = serde_json::from_str(&shipped).expect("a valid script");
     assert!(!script.actions.is_empty());
 }
 

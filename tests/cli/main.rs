@@ -3,7 +3,7 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-use tissue_sim::mechanics::displacement_file::DisplacementFile;
+use tissue_core::mechanics::displacement_file::DisplacementFile;
 
 mod bad_input;
 mod cache;

@@ -3,17 +3,17 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use tissue_sim::calibrate::{GeneSpace, Method, Problem, Settings, calibrate};
-use tissue_sim::mechanics::grid::Grid;
-use tissue_sim::mechanics::material::Material;
-use tissue_sim::mechanics::msm::Topology;
+use tissue_studies::calibrate::{GeneSpace, Method, Problem, Settings, calibrate};
+use tissue_core::mechanics::grid::Grid;
+use tissue_core::mechanics::material::Material;
+use tissue_core::mechanics::msm::Topology;
 
 fn problem(m: Material) -> (Problem, GeneSpace) {
     let space = GeneSpace::new(&m, &Grid::paper(), Topology::Axis);
     (Problem::new(m, Grid::paper(), Topology::Axis).expect("FEM references"), space)
 }
 
-fn run(p: &Problem, space: &GeneSpace, s: &Settings) -> tissue_sim::calibrate::CalibrationResult {
+fn run(p: &Problem, space: &GeneSpace, s: &Settings) -> tissue_studies::calibrate::CalibrationResult {
     calibrate(p, space, s, &AtomicBool::new(false), &mut |_| {}).expect("calibration runs")
 }
 
@@ -23,7 +23,7 @@ fn hybrid_reaches_the_exact_optimum_within_0_1_percent() {
         let (p, space) = problem(m);
         let (k, optimum) = p.axis_optimum();
         // The exact optimum is a minimum: nudging any stiffness raises the cost.
-        let mut ws = tissue_sim::calibrate::Workspace::default();
+        let mut ws = tissue_studies::calibrate::Workspace::default();
         for a in 0..3 {
             for f in [0.99, 1.01] {
                 let mut kk = k;
@@ -33,7 +33,7 @@ fn hybrid_reaches_the_exact_optimum_within_0_1_percent() {
                     kk[2] = kk[a];
                 }
                 let c = p
-                    .cost(&tissue_sim::mechanics::msm::MsmParams::axis(kk[0], kk[1], kk[2], 0.0), &mut ws)
+                    .cost(&tissue_core::mechanics::msm::MsmParams::axis(kk[0], kk[1], kk[2], 0.0), &mut ws)
                     .expect("cost");
                 assert!(c > optimum, "{}: k{} x {f} gives {c} <= {optimum}", p.material.name, a + 1);
             }
@@ -114,8 +114,8 @@ fn shear_model_calibration_beats_the_axis_optimum() {
 
 #[test]
 fn a_result_applies_to_a_running_model() {
-    use tissue_sim::mechanics::cases::LoadCase;
-    use tissue_sim::mechanics::msm::{Dynamics, MsmModel, MsmParams};
+    use tissue_core::mechanics::cases::LoadCase;
+    use tissue_core::mechanics::msm::{Dynamics, MsmModel, MsmParams};
     let (p, space) = problem(Material::object_a());
     let r = run(&p, &space, &Settings { generations: 20, ..Settings::default() });
     let grid = Grid::paper();
@@ -147,21 +147,21 @@ fn hex_lattice_meets_the_richer_model_targets_at_10_newtons() {
         let (axis_problem, _) = problem(m.clone());
         let (k, _) = axis_problem.axis_optimum();
         let hex_problem = Problem::new(m.clone(), Grid::paper(), Topology::Hex).expect("FEM references");
-        let mut ws = tissue_sim::calibrate::Workspace::default();
-        let fem = tissue_sim::mechanics::fem::FemModel::new(Grid::paper(), &m);
-        let (fit, _) = tissue_sim::calibrate::fit::stiffness_fit(&fem, Topology::Hex, m.is_transversely_isotropic());
-        let mut objective = |p: &tissue_sim::mechanics::msm::MsmParams| {
-            hex_problem.paper_gradient(p, &mut tissue_sim::calibrate::Workspace::default()).map_err(|e| e.to_string())
+        let mut ws = tissue_studies::calibrate::Workspace::default();
+        let fem = tissue_core::mechanics::fem::FemModel::new(Grid::paper(), &m);
+        let (fit, _) = tissue_studies::calibrate::fit::stiffness_fit(&fem, Topology::Hex, m.is_transversely_isotropic());
+        let mut objective = |p: &tissue_core::mechanics::msm::MsmParams| {
+            hex_problem.paper_gradient(p, &mut tissue_studies::calibrate::Workspace::default()).map_err(|e| e.to_string())
         };
-        let hex = tissue_sim::calibrate::polish::polish(&fit, m.is_transversely_isotropic(), &mut objective)
+        let hex = tissue_studies::calibrate::polish::polish(&fit, m.is_transversely_isotropic(), &mut objective)
             .expect("polish")
             .params;
         let h = Grid::paper().h();
         let mut errors = |p: &Problem, params| {
             let s = p.static_solutions(&params, &mut ws).expect("static solve");
-            tissue_sim::validate::accuracy::case_errors(h, &s, &p.fem)
+            tissue_studies::validate::accuracy::case_errors(h, &s, &p.fem)
         };
-        let paper = errors(&axis_problem, tissue_sim::mechanics::msm::MsmParams::axis(k[0], k[1], k[2], 0.0));
+        let paper = errors(&axis_problem, tissue_core::mechanics::msm::MsmParams::axis(k[0], k[1], k[2], 0.0));
         let rich = errors(&hex_problem, hex);
         for (p, r) in paper.iter().zip(&rich).filter(|(p, _)| p.force_n == 10.0) {
             assert!(

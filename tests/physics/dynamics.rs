@@ -2,14 +2,14 @@
 //! converged FEM reference, damped releases settling to the static answer, and the viewer's
 //! default step meeting its dynamic targets.
 
-use tissue_sim::mechanics::fem::dynamics::Formulation;
-use tissue_sim::mechanics::grid::Grid;
-use tissue_sim::mechanics::material::Material;
-use tissue_sim::mechanics::msm::Topology;
-use tissue_sim::response::single_mode::{self, Scheme};
-use tissue_sim::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, choose_step};
-use tissue_sim::validate::dynamic::measure::{Configuration, References, measure, modal_model};
-use tissue_sim::validate::dynamic::reference::{self as dynamic_reference, Transient, view_scene};
+use tissue_core::mechanics::fem::dynamics::Formulation;
+use tissue_core::mechanics::grid::Grid;
+use tissue_core::mechanics::material::Material;
+use tissue_core::mechanics::msm::Topology;
+use tissue_core::response::single_mode::{self, Scheme};
+use tissue_core::sim::{DEFAULT_DYNAMIC_BUDGET, Integrator, Model, Simulation, choose_step};
+use tissue_studies::validate::dynamic::measure::{Configuration, References, measure, modal_model};
+use tissue_studies::validate::dynamic::reference::{self as dynamic_reference, Transient, view_scene};
 
 const ZETA: f64 = 0.2;
 
@@ -34,7 +34,7 @@ fn measured_release_of_whole_models_matches_the_single_mode_closed_forms() {
     // Backward Euler at one 60 Hz frame swallows the motion: the 15 Hz fundamental then decays
     // at more than twice the damping set.
     let fem = modal_model(&material, Model::Fem(Formulation::Linear), None).expect("modal");
-    let w = tissue_sim::response::modal::scene_fundamental(&fem).expect("fundamental");
+    let w = tissue_core::response::modal::scene_fundamental(&fem).expect("fundamental");
     let frame = single_mode::discrete(Scheme::BackwardEuler, w, 2.0 * ZETA * w, 1.0 / 60.0).expect("stable");
     assert!(frame.damping_ratio > 2.0 * ZETA, "{frame:?}");
 }
@@ -137,11 +137,11 @@ fn the_viewer_default_meets_its_dynamic_targets_and_the_automatic_step_follows_t
     let fem = Model::Fem(Formulation::Corotational).build(&material, None, ZETA).expect("fem");
     let (i, h, note) = choose_step(None, 1e-3, fem.step_limit(), fem.damping(), DEFAULT_DYNAMIC_BUDGET).expect("auto");
     assert!(h < 1e-3 && note.is_some(), "{i:?} {h} {note:?}");
-    let (p, d) = tissue_sim::sim::predicted_error(i, h, fem.damping()).expect("stable");
+    let (p, d) = tissue_core::sim::predicted_error(i, h, fem.damping()).expect("stable");
     assert!(p <= DEFAULT_DYNAMIC_BUDGET.period && d <= DEFAULT_DYNAMIC_BUDGET.damping);
-    let (_, d1) = tissue_sim::sim::predicted_error(Integrator::Prefactored, 1e-3, fem.damping()).expect("stable");
+    let (_, d1) = tissue_core::sim::predicted_error(Integrator::Prefactored, 1e-3, fem.damping()).expect("stable");
     assert!(d1 > 0.03, "backward Euler at 1 ms: damping error {d1}");
     // The trapezoidal rule's closed form at the same 1 ms: well inside the budget.
-    let (p, d) = tissue_sim::sim::predicted_error(Integrator::Newmark, 1e-3, fem.damping()).expect("stable");
+    let (p, d) = tissue_core::sim::predicted_error(Integrator::Newmark, 1e-3, fem.damping()).expect("stable");
     assert!(p < 0.001 && d < 0.001, "newmark at 1 ms: {p} {d}");
 }

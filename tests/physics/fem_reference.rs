@@ -1,9 +1,9 @@
 //! The FEM reference against exact answers and its own invariants.
 
-use tissue_sim::mechanics::cases::{Bc, CaseSolution, LoadCase, benchmark_cases};
-use tissue_sim::mechanics::fem::{FemModel, StaticSolver};
-use tissue_sim::mechanics::grid::Grid;
-use tissue_sim::mechanics::material::Material;
+use tissue_core::mechanics::cases::{Bc, CaseSolution, LoadCase, benchmark_cases};
+use tissue_core::mechanics::fem::{FemModel, StaticSolver};
+use tissue_core::mechanics::grid::Grid;
+use tissue_core::mechanics::material::Material;
 
 fn max_abs(v: &[[f64; 3]]) -> f64 {
     v.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()))

@@ -2,7 +2,7 @@
 //! (software Vulkan, Mesa lavapipe, in CI): the same script gives the same trajectory. Likewise
 //! the CPU's step with its force in f32 (`"compute": "cpu-f32"`).
 
-use tissue_sim::study::script::{Outcome, Script, run};
+use tissue_studies::study::script::{Outcome, Script, run};
 
 /// Relative tolerance on positions: the largest distance between the two runs' nodes over the
 /// largest displacement. f32 carries about 6e-8 of a spring's length; over 1,000 steps the runs
@@ -53,7 +53,7 @@ fn follows(model: &str, nodes: usize, compute: &str) -> (Outcome, Outcome) {
 
 /// Whether a test that needs an adapter skips: none here and not in CI (which requires one).
 fn skipped() -> bool {
-    let none = tissue_sim::gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none();
+    let none = tissue_gpu::ComputeDevice::open().is_err() && std::env::var_os("CI").is_none();
     if none {
         eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
     }
@@ -91,13 +91,13 @@ fn the_gpu_step_follows_the_cpu_step() {
 
 #[test]
 fn the_gpu_refuses_what_it_has_no_step_for() {
-    if tissue_sim::gpu::ComputeDevice::open().is_err() {
+    if tissue_gpu::ComputeDevice::open().is_err() {
         return; // the missing adapter's own error is the CLI test's
     }
     let err = run(&script("fem-corotational", 8, "gpu")).expect_err("no GPU step").to_string();
     assert!(err.contains("corotational") && !err.contains('\n'), "{err}");
     let mut prefactored = script("hex", 8, "gpu");
-    prefactored.integrator = Some(tissue_sim::sim::Integrator::Prefactored);
+    prefactored.integrator = Some(tissue_core::sim::Integrator::Prefactored);
     let err = run(&prefactored).expect_err("symplectic only").to_string();
     assert!(err.contains("symplectic") && !err.contains('\n'), "{err}");
 }
@@ -138,7 +138,7 @@ fn the_state_stays_on_the_gpu_under_the_surface_probe() {
 /// of the step: a 1e9 N pull stops the run as on the CPU.
 #[test]
 fn the_guard_catches_a_blow_up_on_the_gpu() {
-    if tissue_sim::gpu::ComputeDevice::open().is_err() {
+    if tissue_gpu::ComputeDevice::open().is_err() {
         return; // the missing adapter's own error is the CLI test's
     }
     let script: Script = serde_json::from_value(serde_json::json!({
@@ -155,9 +155,9 @@ fn the_guard_catches_a_blow_up_on_the_gpu() {
 /// is brought back.
 #[test]
 fn the_gpu_guard_figures_are_the_states() {
-    use tissue_sim::mechanics::{cases::LoadCase, grid::Grid, material::Material};
-    use tissue_sim::sim::{Integrator, Model, Tissue};
-    let Ok(gpu) = tissue_sim::gpu::ComputeDevice::open() else {
+    use tissue_core::mechanics::{cases::LoadCase, grid::Grid, material::Material};
+    use tissue_core::sim::{Integrator, Model, Tissue};
+    let Ok(gpu) = tissue_gpu::ComputeDevice::open() else {
         return; // the missing adapter's own error is the CLI test's
     };
     for model in ["hex", "fem-linear"] {
@@ -165,7 +165,7 @@ fn the_gpu_guard_figures_are_the_states() {
         let grid = Grid::new(9).expect("grid");
         let mut inner = model.build_undamped_on(grid, &Material::object_a(), None).expect("built");
         inner.apply_case(&LoadCase::clamped(&grid, "A", 3, 1.0));
-        let mut tissue = tissue_sim::gpu::GpuTissue::new(&gpu, inner).expect("on the GPU");
+        let mut tissue = tissue_gpu::GpuTissue::new(&gpu, inner).expect("on the GPU");
         let dt = 0.5 * tissue.explicit_dt_limit();
         for _ in 0..200 {
             tissue.step(Integrator::Symplectic, dt).expect("a step");

@@ -2,10 +2,10 @@
 //! (an element the lump's surface cuts integrated by sub-cells), and felt by the converged
 //! continuum probe reference as an independent measurement says.
 
-use tissue_sim::mechanics::material::Material;
-use tissue_sim::sim::material_surface::compliance::{ContactScratch, SurfaceCompliance};
-use tissue_sim::sim::material_surface::with_background;
-use tissue_sim::validate::continuum::{DEFAULT_TOLERANCE, Press, press_force};
+use tissue_core::mechanics::material::Material;
+use tissue_core::sim::material_surface::compliance::{ContactScratch, SurfaceCompliance};
+use tissue_core::sim::material_surface::with_background;
+use tissue_studies::validate::continuum::{DEFAULT_TOLERANCE, Press, press_force};
 
 fn shipped(name: &str) -> Material {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/examples").join(name);
@@ -37,7 +37,7 @@ fn the_shipped_lumps_read_as_written() {
 fn the_continuum_feels_a_lump_under_the_probe() {
     let a = Material::object_a();
     let mut lump = a.clone();
-    lump.inclusions.push(tissue_sim::mechanics::inclusion::Inclusion {
+    lump.inclusions.push(tissue_core::mechanics::inclusion::Inclusion {
         centre: [0.05, 0.05, 0.08],
         radius: 0.008,
         stiffness: a.stiffness * 5.0,
@@ -59,7 +59,7 @@ fn the_continuum_feels_a_lump_under_the_probe() {
 /// fitted: every press is held out.
 #[test]
 fn the_probe_feels_a_lump_as_the_continuum_does() {
-    let dir = tissue_sim::io::cache_dir();
+    let dir = tissue_core::io::cache_dir();
     let cases = [
         (Material::object_a(), [0.05, 0.05, 0.08], vec![[0.05, 0.05, 0.1], [0.05, 0.042, 0.1], [0.05, 0.025, 0.1]]),
         (Material::object_b(), [0.08, 0.05, 0.05], vec![[0.1, 0.05, 0.05], [0.1, 0.05, 0.058], [0.1, 0.02, 0.05]]),
@@ -67,7 +67,7 @@ fn the_probe_feels_a_lump_as_the_continuum_does() {
     let mut scratch = ContactScratch::default();
     for (background, centre, presses) in cases {
         let mut lump = background.clone();
-        lump.inclusions.push(tissue_sim::mechanics::inclusion::Inclusion {
+        lump.inclusions.push(tissue_core::mechanics::inclusion::Inclusion {
             centre,
             radius: 0.008,
             stiffness: background.stiffness * 5.0,
@@ -103,13 +103,13 @@ fn the_probe_feels_a_lump_as_the_continuum_does() {
 /// away from it, nothing to speak of (against the FEM with the lump on a grid refined 5 times).
 #[test]
 fn the_models_take_the_lump_as_the_material_does() {
-    use tissue_sim::mechanics::fem::dynamics::Formulation;
-    use tissue_sim::mechanics::msm::Topology;
-    use tissue_sim::sim::Model;
+    use tissue_core::mechanics::fem::dynamics::Formulation;
+    use tissue_core::mechanics::msm::Topology;
+    use tissue_core::sim::Model;
     let lump = shipped("lump_5x_r8.toml");
-    let grid = tissue_sim::mechanics::grid::Grid::paper();
+    let grid = tissue_core::mechanics::grid::Grid::paper();
     for model in [Model::Fem(Formulation::Linear), Model::Lattice(Topology::Hex)] {
-        let r = tissue_sim::validate::lumps::evaluate(&lump, model, None, grid).expect("scored");
+        let r = tissue_studies::validate::lumps::evaluate(&lump, model, None, grid).expect("scored");
         assert!(r.reference_change < 0.02, "{}", r.to_text());
         let (over, rim, away) = (&r.cases[0], &r.cases[1], &r.cases[2]);
         assert!(over.id.ends_with("over") && rim.id.ends_with("rim") && away.id.ends_with("away"));

@@ -1,10 +1,10 @@
 //! The mass-spring model's static equilibrium: closed form, Newton and dynamic relaxation agree.
 
-use tissue_sim::mechanics::cases::{Bc, LoadCase, benchmark_cases};
-use tissue_sim::mechanics::grid::Grid;
-use tissue_sim::mechanics::material::TISSUE_DENSITY;
-use tissue_sim::mechanics::msm::statics::{NewtonOptions, closed_form_axis, solve_newton};
-use tissue_sim::mechanics::msm::{Dynamics, MsmModel, MsmParams};
+use tissue_core::mechanics::cases::{Bc, LoadCase, benchmark_cases};
+use tissue_core::mechanics::grid::Grid;
+use tissue_core::mechanics::material::TISSUE_DENSITY;
+use tissue_core::mechanics::msm::statics::{NewtonOptions, closed_form_axis, solve_newton};
+use tissue_core::mechanics::msm::{Dynamics, MsmModel, MsmParams};
 
 fn paper() -> MsmParams {
     MsmParams::axis(968.2, 1010.0, 1137.7, 0.6)

@@ -4,10 +4,10 @@
 //! there. Before, at 32 of 36 points of a grid over the top face
 //! the held force swung between 0 and 2.2 to 3.5 times its settled value.
 
-use tissue_sim::mechanics::material::Material;
-use tissue_sim::sim::material_surface::compliance::{ContactScratch, SurfaceCompliance};
-use tissue_sim::sim::material_surface::load_or_compute;
-use tissue_sim::study::script::{Script, run};
+use tissue_core::mechanics::material::Material;
+use tissue_core::sim::material_surface::compliance::{ContactScratch, SurfaceCompliance};
+use tissue_core::sim::material_surface::load_or_compute;
+use tissue_studies::study::script::{Script, run};
 
 /// Holds a press for `hold_s` (eased in over 1 s, as a hand presses: with no damping at all, the modes a press excites ring on) and returns the force samples of the second
 /// half of the hold, newtons.
@@ -38,7 +38,7 @@ fn held_along(at: [f64; 3], direction: [f64; 3], radius: f64, depth: f64, zeta: 
 #[test]
 fn a_held_press_is_steady_and_settles_to_the_materials_static_force() {
     let material = Material::object_a();
-    let dir = tissue_sim::io::cache_dir();
+    let dir = tissue_core::io::cache_dir();
     let compliance = load_or_compute(&material, dir.as_deref(), &mut |_| true).expect("the surface compliance");
     let mut scratch = ContactScratch::default();
     let points = [[0.05, 0.05], [0.029, 0.0715], [0.015, 0.05], [0.085, 0.085], [0.043, 0.015]];
@@ -76,7 +76,7 @@ fn static_force(
     radius: f64,
     depth: f64,
 ) -> f64 {
-    let centre = tissue_sim::sim::press::centre(at, glam::DVec3::from(direction), radius, depth);
+    let centre = tissue_core::sim::press::centre(at, glam::DVec3::from(direction), radius, depth);
     let f = compliance.press(centre, radius, scratch).expect("a press");
     -(0..3).map(|c| f[c] * direction[c]).sum::<f64>()
 }
@@ -87,7 +87,7 @@ fn static_force(
 #[test]
 fn a_press_held_on_every_face_an_edge_or_a_corner_is_steady() {
     let material = Material::object_a();
-    let dir = tissue_sim::io::cache_dir();
+    let dir = tissue_core::io::cache_dir();
     let compliance = load_or_compute(&material, dir.as_deref(), &mut |_| true).expect("the surface compliance");
     let mut scratch = ContactScratch::default();
     let s = std::f64::consts::FRAC_1_SQRT_2;
@@ -125,7 +125,7 @@ fn a_press_held_on_every_face_an_edge_or_a_corner_is_steady() {
 /// stays within 0.5 % of its mean, and the mean is the static material force.
 fn grid_held_steady(axis: usize, high: bool) {
     let material = Material::object_a();
-    let dir = tissue_sim::io::cache_dir();
+    let dir = tissue_core::io::cache_dir();
     let compliance = load_or_compute(&material, dir.as_deref(), &mut |_| true).expect("the surface compliance");
     let mut scratch = ContactScratch::default();
     let others: Vec<usize> = (0..3).filter(|&a| a != axis).collect();

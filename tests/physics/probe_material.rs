@@ -3,11 +3,11 @@
 //! converged continuum reference shipped in `assets/continuum/`, and the slide across the top face
 //! smooth.
 
-use tissue_sim::mechanics::material::Material;
-use tissue_sim::sim::material_surface::compliance::{ContactScratch, DEFAULT_DIVISIONS, SurfaceCompliance};
-use tissue_sim::validate::continuum::DEFAULT_TOLERANCE;
-use tissue_sim::validate::continuum::cache::ContinuumCache;
-use tissue_sim::validate::probe::presses::press_cases;
+use tissue_core::mechanics::material::Material;
+use tissue_core::sim::material_surface::compliance::{ContactScratch, DEFAULT_DIVISIONS, SurfaceCompliance};
+use tissue_studies::validate::continuum::DEFAULT_TOLERANCE;
+use tissue_studies::validate::continuum::cache::ContinuumCache;
+use tissue_studies::validate::probe::presses::press_cases;
 
 #[test]
 fn the_surface_compliance_feels_like_the_material_wherever_the_probe_lands() {

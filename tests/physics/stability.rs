@@ -2,15 +2,15 @@
 //! critical step, implicit Euler far beyond it, linear against corotational FEM under a large
 //! rotation, and the corotational FEM's implicit steps under one.
 
-use tissue_sim::mechanics::cases::LoadCase;
-use tissue_sim::mechanics::fem::FemModel;
-use tissue_sim::mechanics::fem::dynamics::{FemDynamics, Formulation};
-use tissue_sim::mechanics::grid::Grid;
-use tissue_sim::mechanics::material::Material;
-use tissue_sim::mechanics::msm::{Dynamics, MsmModel, Topology};
-use tissue_sim::sim::shipped::tissue_params;
-use tissue_sim::sim::{Integrator, Simulation};
-use tissue_sim::study::stability::{fem_point, msm_point, scaled_undamped};
+use tissue_core::mechanics::cases::LoadCase;
+use tissue_core::mechanics::fem::FemModel;
+use tissue_core::mechanics::fem::dynamics::{FemDynamics, Formulation};
+use tissue_core::mechanics::grid::Grid;
+use tissue_core::mechanics::material::Material;
+use tissue_core::mechanics::msm::{Dynamics, MsmModel, Topology};
+use tissue_core::sim::shipped::tissue_params;
+use tissue_core::sim::{Integrator, Simulation};
+use tissue_studies::study::stability::{fem_point, msm_point, scaled_undamped};
 
 fn hex_model(grid: Grid, stiffness: f64) -> MsmModel {
     let m = Material::object_a();
@@ -170,7 +170,7 @@ fn linear_fem_fails_under_large_rotation_and_corotational_does_not() {
 /// to their tolerance, the cube comes to rest under the viewer's automatic step.
 #[test]
 fn the_corotational_fem_comes_to_rest_under_a_held_corner_drag() {
-    use tissue_sim::sim::{FemTissue, Tissue};
+    use tissue_core::sim::{FemTissue, Tissue};
     let grid = Grid::new(16).expect("grid");
     let mut tissue = FemTissue::new(grid, &Material::object_a(), Formulation::Corotational);
     tissue.set_damping_ratio(0.2).expect("damping");
@@ -185,7 +185,7 @@ fn the_corotational_fem_comes_to_rest_under_a_held_corner_drag() {
 /// ticks of 1 ms; returns the fastest node's speed from tick `from` on and the corner's rest
 /// position. A blow-up fails the test, named by `what`.
 fn hold_corner_drag(sim: &mut Simulation, from: usize, what: &str) -> (f64, [f64; 3]) {
-    use tissue_sim::sim::Tool;
+    use tissue_core::sim::Tool;
     let nodes = sim.tissue.free().len();
     let node = nodes - 1;
     let substeps = (1e-3 / sim.dt).round() as usize;
@@ -216,9 +216,9 @@ fn hold_corner_drag(sim: &mut Simulation, from: usize, what: &str) -> (f64, [f64
 /// velocity given the move, it comes to rest.
 #[test]
 fn the_fems_node_contact_comes_to_rest_under_a_held_press() {
-    use tissue_sim::sim::{FemTissue, Tissue, Tool};
+    use tissue_core::sim::{FemTissue, Tissue, Tool};
     let grid = Grid::new(16).expect("grid");
-    let radii = [0.0075, tissue_sim::validate::touch::PROBE_RADIUS_M];
+    let radii = [0.0075, tissue_studies::validate::touch::PROBE_RADIUS_M];
     for (formulation, radius) in
         [Formulation::Linear, Formulation::Corotational].into_iter().flat_map(|f| radii.map(|r| (f, r)))
     {
@@ -285,7 +285,7 @@ fn the_corotational_fems_newmark_step_keeps_a_spinning_cube_rigid_and_its_energy
         }
         (fem.kinetic_energy() / e0 - 1.0, max_edge_strain(&fem), fem.newton_solves())
     };
-    use tissue_sim::mechanics::newton_krylov::{KRYLOV_MAX_ITERATIONS, NEWTON_MAX_ITERATIONS};
+    use tissue_core::mechanics::newton_krylov::{KRYLOV_MAX_ITERATIONS, NEWTON_MAX_ITERATIONS};
     let (energy, strain, solves) = spin(NEWTON_MAX_ITERATIONS, KRYLOV_MAX_ITERATIONS);
     eprintln!("Newton on the warped stiffness: energy {energy:+.2e}, edge strain {strain:.2e}, {solves:?}");
     assert!(energy.abs() < 2e-3, "kinetic energy changed by {energy}");
@@ -307,8 +307,8 @@ fn the_corotational_fems_newmark_step_keeps_a_spinning_cube_rigid_and_its_energy
 /// force on the hand.
 #[test]
 fn a_held_drag_comes_to_rest_where_the_pull_balances_the_tissue_under_every_scheme() {
-    use tissue_sim::mechanics::msm::Topology;
-    use tissue_sim::sim::Model;
+    use tissue_core::mechanics::msm::Topology;
+    use tissue_core::sim::Model;
     let grid = Grid::paper();
     let material = Material::object_a();
     let node = grid.num_nodes() - 1;

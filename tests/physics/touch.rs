@@ -6,13 +6,13 @@ use std::sync::atomic::AtomicBool;
 
 use argmin::core::{CostFunction, Executor};
 use argmin::solver::neldermead::NelderMead;
-use tissue_sim::calibrate::{CaseSet, GeneSpace, Problem, Settings, Workspace, calibrate};
-use tissue_sim::mechanics::grid::Grid;
-use tissue_sim::mechanics::material::Material;
-use tissue_sim::mechanics::msm::{MsmParams, Topology};
-use tissue_sim::response::linear::{group_values, with_group_values};
-use tissue_sim::sim::Model;
-use tissue_sim::validate::touch::score::{Reference, evaluate};
+use tissue_studies::calibrate::{CaseSet, GeneSpace, Problem, Settings, Workspace, calibrate};
+use tissue_core::mechanics::grid::Grid;
+use tissue_core::mechanics::material::Material;
+use tissue_core::mechanics::msm::{MsmParams, Topology};
+use tissue_core::response::linear::{group_values, with_group_values};
+use tissue_core::sim::Model;
+use tissue_studies::validate::touch::score::{Reference, evaluate};
 
 #[test]
 fn shipped_tissues_record_their_validation_scores_and_the_default_is_the_best() {
@@ -20,7 +20,7 @@ fn shipped_tissues_record_their_validation_scores_and_the_default_is_the_best() 
         let reference = Reference::new(&m, Grid::paper()).expect("reference");
         let mut best = (f64::INFINITY, Topology::Axis);
         for topology in [Topology::Shear, Topology::Hex] {
-            let shipped = tissue_sim::sim::shipped::shipped(&m, topology).expect("shipped");
+            let shipped = tissue_core::sim::shipped::shipped(&m, topology).expect("shipped");
             assert_eq!(shipped.cases, CaseSet::Touch, "{} {}", m.name, topology.name());
             let recorded = shipped.validation.expect("recorded scores");
             let r = evaluate(&reference, &m, Model::Lattice(shipped.params.topology()), Some(shipped.params))
@@ -41,10 +41,10 @@ fn shipped_tissues_record_their_validation_scores_and_the_default_is_the_best() 
                 best = (r.worst_force_error, topology);
             }
         }
-        assert_eq!(best.1, tissue_sim::sim::shipped::DEFAULT_TOPOLOGY, "object {}", m.name);
+        assert_eq!(best.1, tissue_core::sim::shipped::DEFAULT_TOPOLOGY, "object {}", m.name);
         // The default tissue's lowest six frequencies are within 5 % of the FEM's.
         let default =
-            tissue_sim::sim::shipped::shipped(&m, tissue_sim::sim::shipped::DEFAULT_TOPOLOGY).expect("shipped");
+            tissue_core::sim::shipped::shipped(&m, tissue_core::sim::shipped::DEFAULT_TOPOLOGY).expect("shipped");
         let f = default.validation.expect("scores").worst_frequency_error;
         assert!(f < 0.05, "object {}: worst frequency error {f}", m.name);
     }

@@ -7,16 +7,16 @@
 //! forces.
 
 use egui::{Event, PointerButton, Pos2, RawInput, Rect};
-use tissue_sim::app::gestures::{Gesture, Scene, view_input};
-use tissue_sim::app::state::{Request, ToolKind};
-use tissue_sim::mechanics::grid::Grid;
-use tissue_sim::mechanics::material::Material;
-use tissue_sim::render::camera::OrbitCamera;
-use tissue_sim::render::mesh::SurfaceMesh;
-use tissue_sim::sim::Tool;
-use tissue_sim::sim::material_surface::compliance::ContactScratch;
-use tissue_sim::validate::continuum::cache::ContinuumCache;
-use tissue_sim::validate::continuum::{DEFAULT_TOLERANCE, Press};
+use tissue_viewer::app::gestures::{Gesture, Scene, view_input};
+use tissue_viewer::app::state::{Request, ToolKind};
+use tissue_core::mechanics::grid::Grid;
+use tissue_core::mechanics::material::Material;
+use tissue_viewer::render::camera::OrbitCamera;
+use tissue_viewer::render::mesh::SurfaceMesh;
+use tissue_core::sim::Tool;
+use tissue_core::sim::material_surface::compliance::ContactScratch;
+use tissue_studies::validate::continuum::cache::ContinuumCache;
+use tissue_studies::validate::continuum::{DEFAULT_TOLERANCE, Press};
 
 const WINDOW: [f32; 2] = [1280.0, 720.0];
 const PANEL: f32 = 380.0;
@@ -50,7 +50,7 @@ fn frame(
 /// The gesture a person makes at the default window and camera: the button pressed over the
 /// middle of the top face and moved 40 pixels down, a pixel a frame (50 frames a second); the
 /// probe's press after each frame, if the gesture pressed it.
-fn forty_pixels_down(radius_mm: f64) -> Vec<Option<tissue_sim::app::recording::Press>> {
+fn forty_pixels_down(radius_mm: f64) -> Vec<Option<tissue_viewer::app::recording::Press>> {
     let grid = Grid::paper();
     let mut mesh = SurfaceMesh::new(&grid);
     let positions: Vec<[f32; 3]> = grid.positions().iter().map(|p| p.map(|v| v as f32)).collect();
@@ -109,8 +109,8 @@ fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_m
     // The force the viewer's contact gives there (the material's surface compliance, which a
     // held press settles to) against the material's own.
     let material = Material::object_a();
-    let dir = tissue_sim::io::cache_dir();
-    let compliance = tissue_sim::sim::material_surface::load_or_compute(&material, dir.as_deref(), &mut |_| true)
+    let dir = tissue_core::io::cache_dir();
+    let compliance = tissue_core::sim::material_surface::load_or_compute(&material, dir.as_deref(), &mut |_| true)
         .expect("the surface compliance");
     let viewer = compliance.press(centre, radius, &mut ContactScratch::default()).expect("a press")[2];
     let mut kept = ContinuumCache::open(&material, dir.as_deref());
@@ -127,21 +127,21 @@ fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_m
 /// pixel) and its force the material's there within 7 %.
 #[test]
 fn the_viewers_press_recorded_replays_to_its_forces() {
-    use tissue_sim::app::recording::Timeline;
-    use tissue_sim::sim::{Integrator, Model, Simulation};
-    use tissue_sim::study::script::{Recorded, Script, run};
+    use tissue_viewer::app::recording::Timeline;
+    use tissue_core::sim::{Integrator, Model, Simulation};
+    use tissue_studies::study::script::{Recorded, Script, run};
     let material = Material::object_a();
     let grid = Grid::paper();
-    let model = Model::Lattice(tissue_sim::sim::shipped::DEFAULT_TOPOLOGY);
+    let model = Model::Lattice(tissue_core::sim::shipped::DEFAULT_TOPOLOGY);
     let tissue = model.build_on(grid, &material, None, 0.2).expect("the default tissue");
-    let case = tissue_sim::mechanics::cases::LoadCase::bottom_clamp(&grid, "A");
+    let case = tissue_core::mechanics::cases::LoadCase::bottom_clamp(&grid, "A");
     let mut sim = Simulation::with_tissue(tissue, Integrator::Prefactored, 1e-4, Some(&case));
     let _ = sim.set_integrator(None, 1e-4);
-    let dir = tissue_sim::io::cache_dir();
+    let dir = tissue_core::io::cache_dir();
     let surface =
-        tissue_sim::sim::material_surface::MaterialSurface::load_or_compute(&material, dir.as_deref(), &mut |_| true)
+        tissue_core::sim::material_surface::MaterialSurface::load_or_compute(&material, dir.as_deref(), &mut |_| true)
             .expect("the surface compliance");
-    sim.set_surface_probe(Some(tissue_sim::sim::material_surface::SurfaceProbe::on(&surface, grid, Some(0.2))));
+    sim.set_surface_probe(Some(tissue_core::sim::material_surface::SurfaceProbe::on(&surface, grid, Some(0.2))));
     let mut timeline = Timeline::new(true);
     let step = |timeline: &mut Timeline, sim: &mut Simulation, seconds: f64| {
         for _ in 0..(seconds / sim.dt).round() as usize {
@@ -161,7 +161,7 @@ fn the_viewers_press_recorded_replays_to_its_forces() {
     let last = rec.force_path.last().expect("force samples").clone();
     assert!((last.depth_m - 0.004).abs() < 1e-6, "recorded indentation {} m for 40 pixels", last.depth_m);
     let script = Script {
-        object: Some(tissue_sim::mechanics::object::Object::A),
+        object: Some(tissue_core::mechanics::object::Object::A),
         material: None,
         model,
         dt: rec.dt,
@@ -170,7 +170,7 @@ fn the_viewers_press_recorded_replays_to_its_forces() {
         clamp: "bottom".into(),
         nodes: grid.n(),
         contact: rec.contact,
-        compute: tissue_sim::gpu::Compute::Cpu,
+        compute: tissue_gpu::Compute::Cpu,
         actions: rec.actions,
         recorded: Some(Recorded { force_path: rec.force_path, note: None }),
     };

@@ -1,21 +1,21 @@
 //! Scripted interaction (the `simulate` command's engine): deterministic and physically sane.
 
-use tissue_sim::sim::Integrator;
-use tissue_sim::study::script::{Action, Script, run};
+use tissue_core::sim::Integrator;
+use tissue_studies::study::script::{Action, Script, run};
 
 fn script(actions: Vec<Action>) -> Script {
     Script {
-        object: Some(tissue_sim::mechanics::object::Object::A),
+        object: Some(tissue_core::mechanics::object::Object::A),
         material: None,
-        model: tissue_sim::sim::Model::Lattice(tissue_sim::mechanics::msm::Topology::Shear),
+        model: tissue_core::sim::Model::Lattice(tissue_core::mechanics::msm::Topology::Shear),
         dt: 1e-4,
         integrator: None,
         damping_ratio: None,
         clamp: "bottom".into(),
         nodes: 8,
         // The model's own node contact: these tests check that no node ends inside the sphere.
-        contact: tissue_sim::study::script::Contact::Nodes,
-        compute: tissue_sim::gpu::Compute::Cpu,
+        contact: tissue_studies::study::script::Contact::Nodes,
+        compute: tissue_gpu::Compute::Cpu,
         actions,
         recorded: None,
     }
@@ -139,7 +139,7 @@ fn script_bounds_are_named_before_any_work() {
     let s = script((0..200).map(|_| Action::Wait { duration_s: 100.0, record: false }).collect());
     let e = run(&s).expect_err("too many steps").to_string();
     assert!(e.contains("steps in all") && e.contains("bound"), "{e}");
-    let s = script((0..=tissue_sim::study::script::MAX_ACTIONS).map(|_| Action::Release { record: false }).collect());
+    let s = script((0..=tissue_studies::study::script::MAX_ACTIONS).map(|_| Action::Release { record: false }).collect());
     assert!(run(&s).expect_err("too many actions").to_string().contains("actions"));
     let s = script((0..300).map(|_| Action::Release { record: true }).collect());
     assert!(run(&s).expect_err("too many recorded").to_string().contains("record"));
@@ -167,7 +167,7 @@ fn soak_drags_probes_and_releases_stay_finite_and_return_to_rest() {
     let top = |i: usize| [(i % 8) as f64 * 0.1 / 7.0, (i / 8 % 8) as f64 * 0.1 / 7.0, 0.1];
     for round in 0..10 {
         let node = 448 + (round * 13) % 64; // top-face nodes
-        let r = tissue_sim::mechanics::grid::Grid::paper().position(node);
+        let r = tissue_core::mechanics::grid::Grid::paper().position(node);
         let to = [r[0] + 0.01 * (round % 3) as f64 - 0.01, r[1] + 0.005, r[2] + 0.01];
         actions.push(Action::Drag { node, to, duration_s: 0.3, record: false });
         actions.push(Action::Wait { duration_s: 0.5, record: false });
@@ -231,12 +231,12 @@ fn a_script_takes_a_material_file_from_its_folder() {
     };
     let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/examples");
     let own =
-        tissue_sim::study::script::run_from(&script(serde_json::json!({ "material": "my_tissue.toml" })), &folder)
+        tissue_studies::study::script::run_from(&script(serde_json::json!({ "material": "my_tissue.toml" })), &folder)
             .expect("the material file's script runs");
     assert_eq!(own.object, "my_tissue");
     assert!(own.force_depth.last().is_some_and(|s| s.force_n > 0.0));
     let both = script(serde_json::json!({ "object": "A", "material": "my_tissue.toml" }));
-    let e = tissue_sim::study::script::run_from(&both, &folder).expect_err("both refused");
+    let e = tissue_studies::study::script::run_from(&both, &folder).expect_err("both refused");
     assert!(format!("{e:#}").contains("not both"), "{e:#}");
     let e = run(&script(serde_json::json!({}))).expect_err("neither refused");
     assert!(format!("{e:#}").contains("\"material\""), "{e:#}");
@@ -245,7 +245,7 @@ fn a_script_takes_a_material_file_from_its_folder() {
     // A material with a lump: the model takes it (the FEM's elements), so its own node contact
     // feels it, as the probe's surface contact does.
     let force = |s: &Script| {
-        let out = tissue_sim::study::script::run_from(s, &folder).expect("the script runs");
+        let out = tissue_studies::study::script::run_from(s, &folder).expect("the script runs");
         out.force_depth.last().expect("a sample").force_n
     };
     let on_nodes = force(&script(serde_json::json!({ "material": "lump_5x_r8.toml" })))
@@ -253,8 +253,8 @@ fn a_script_takes_a_material_file_from_its_folder() {
     assert!((1.01..1.5).contains(&on_nodes), "the model's lump on its nodes {on_nodes}");
     let felt = |keys: serde_json::Value| {
         let mut s = script(keys);
-        s.contact = tissue_sim::sim::press::Contact::Surface;
-        let out = tissue_sim::study::script::run_from(&s, &folder).expect("the script runs");
+        s.contact = tissue_core::sim::press::Contact::Surface;
+        let out = tissue_studies::study::script::run_from(&s, &folder).expect("the script runs");
         out.force_depth.last().expect("a sample").force_n
     };
     let ratio = felt(serde_json::json!({ "material": "lump_5x_r8.toml" })) / felt(serde_json::json!({ "object": "A" }));

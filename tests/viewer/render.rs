@@ -1,8 +1,8 @@
 //! Offscreen rendering through the viewer's renderer on whatever adapter exists (software Vulkan,
 //! Mesa lavapipe, in CI): the cube is drawn, and a deformed case differs from the rest shape.
 
-use tissue_sim::mechanics::msm::Topology;
-use tissue_sim::render::scene::{ColourMode, StaticScene};
+use tissue_core::mechanics::msm::Topology;
+use tissue_viewer::render::scene::{ColourMode, StaticScene};
 
 fn decode(png: &[u8]) -> image::RgbaImage {
     image::load_from_memory(png).expect("valid PNG").to_rgba8()
@@ -10,7 +10,7 @@ fn decode(png: &[u8]) -> image::RgbaImage {
 
 #[test]
 fn offscreen_render_shows_the_cube_and_its_deformation() {
-    if tissue_sim::render::offscreen::Headless::new().is_err() && std::env::var_os("CI").is_none() {
+    if tissue_viewer::render::offscreen::Headless::new().is_err() && std::env::var_os("CI").is_none() {
         eprintln!("skipped: no wgpu adapter (install mesa-vulkan-drivers for software Vulkan); CI requires one");
         return;
     }

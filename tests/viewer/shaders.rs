@@ -26,8 +26,8 @@ fn all_shaders_validate() {
     }
     assert!(count >= 4, "expected the globals, surface, line and compute shaders, found {count}");
     // The sources the program embeds.
-    validate("SURFACE_WGSL", tissue_sim::render::gpu::SURFACE_WGSL);
-    validate("LINES_WGSL", tissue_sim::render::gpu::LINES_WGSL);
-    validate("EXPLICIT_STEP_WGSL", tissue_sim::gpu::explicit::EXPLICIT_STEP_WGSL);
-    assert_eq!(tissue_sim::render::gpu::SURFACE_WGSL.matches("struct Globals").count(), 1);
+    validate("SURFACE_WGSL", tissue_viewer::render::gpu::SURFACE_WGSL);
+    validate("LINES_WGSL", tissue_viewer::render::gpu::LINES_WGSL);
+    validate("EXPLICIT_STEP_WGSL", tissue_gpu::explicit::EXPLICIT_STEP_WGSL);
+    assert_eq!(tissue_viewer::render::gpu::SURFACE_WGSL.matches("struct Globals").count(), 1);
 }
