@@ -24,9 +24,10 @@ fn fem_writes_the_spec_format_and_reads_back() {
     // Same numbers as the library computes.
     let grid = tissue_core::mechanics::grid::Grid::paper();
     let cases = tissue_core::mechanics::cases::benchmark_cases(&grid, "A", tissue_core::mechanics::cases::Bc::Clamped);
-    let sols = tissue_core::mechanics::fem::FemModel::new(grid, &tissue_core::mechanics::material::Material::object_a())
-        .solve_cases(&cases)
-        .expect("solve");
+    let sols =
+        tissue_core::mechanics::fem::FemModel::new(grid, &tissue_core::mechanics::material::Material::object_a())
+            .solve_cases(&cases)
+            .expect("solve");
     assert!(file.cases[4].displacements == sols[4].displacements, "JSON does not round-trip exactly");
 }
 

@@ -3,10 +3,10 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use tissue_studies::calibrate::{GeneSpace, Method, Problem, Settings, calibrate};
 use tissue_core::mechanics::grid::Grid;
 use tissue_core::mechanics::material::Material;
 use tissue_core::mechanics::msm::Topology;
+use tissue_studies::calibrate::{GeneSpace, Method, Problem, Settings, calibrate};
 
 fn problem(m: Material) -> (Problem, GeneSpace) {
     let space = GeneSpace::new(&m, &Grid::paper(), Topology::Axis);
@@ -149,9 +149,12 @@ fn hex_lattice_meets_the_richer_model_targets_at_10_newtons() {
         let hex_problem = Problem::new(m.clone(), Grid::paper(), Topology::Hex).expect("FEM references");
         let mut ws = tissue_studies::calibrate::Workspace::default();
         let fem = tissue_core::mechanics::fem::FemModel::new(Grid::paper(), &m);
-        let (fit, _) = tissue_studies::calibrate::fit::stiffness_fit(&fem, Topology::Hex, m.is_transversely_isotropic());
+        let (fit, _) =
+            tissue_studies::calibrate::fit::stiffness_fit(&fem, Topology::Hex, m.is_transversely_isotropic());
         let mut objective = |p: &tissue_core::mechanics::msm::MsmParams| {
-            hex_problem.paper_gradient(p, &mut tissue_studies::calibrate::Workspace::default()).map_err(|e| e.to_string())
+            hex_problem
+                .paper_gradient(p, &mut tissue_studies::calibrate::Workspace::default())
+                .map_err(|e| e.to_string())
         };
         let hex = tissue_studies::calibrate::polish::polish(&fit, m.is_transversely_isotropic(), &mut objective)
             .expect("polish")

@@ -43,7 +43,9 @@ fn the_continuum_feels_a_lump_under_the_probe() {
         stiffness: a.stiffness * 5.0,
     });
     let force = |m: &Material, at: [f64; 3]| {
-        press_force(m, &Press::normal(at, 0.015, 0.004), DEFAULT_TOLERANCE, &mut |_| {}).expect("converges").force_n
+        press_force(m, &Press::normal(at, 0.015).depth(0.004), DEFAULT_TOLERANCE, &mut |_| {})
+            .expect("converges")
+            .force_n
     };
     let over = force(&lump, [0.05, 0.05, 0.1]) / force(&a, [0.05, 0.05, 0.1]) - 1.0;
     let away = force(&lump, [0.05, 0.015, 0.1]) / force(&a, [0.05, 0.015, 0.1]) - 1.0;
@@ -74,7 +76,7 @@ fn the_probe_feels_a_lump_as_the_continuum_does() {
         });
         let (plain, felt) = with_background(&lump, dir.as_deref(), &mut |_| true).expect("the surface compliance");
         for at in presses {
-            let press = Press::normal(at, 0.015, 0.004);
+            let press = Press::normal(at, 0.015).depth(0.004);
             let mut probe = |c: &SurfaceCompliance| {
                 scratch.clear();
                 press.force_along(c.press(press.centre(), 0.015, &mut scratch).expect("the press"))

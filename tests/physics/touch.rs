@@ -6,12 +6,12 @@ use std::sync::atomic::AtomicBool;
 
 use argmin::core::{CostFunction, Executor};
 use argmin::solver::neldermead::NelderMead;
-use tissue_studies::calibrate::{CaseSet, GeneSpace, Problem, Settings, Workspace, calibrate};
 use tissue_core::mechanics::grid::Grid;
 use tissue_core::mechanics::material::Material;
 use tissue_core::mechanics::msm::{MsmParams, Topology};
 use tissue_core::response::linear::{group_values, with_group_values};
 use tissue_core::sim::Model;
+use tissue_studies::calibrate::{CaseSet, GeneSpace, Problem, Settings, Workspace, calibrate};
 use tissue_studies::validate::touch::score::{Reference, evaluate};
 
 #[test]

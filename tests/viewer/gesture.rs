@@ -7,16 +7,16 @@
 //! forces.
 
 use egui::{Event, PointerButton, Pos2, RawInput, Rect};
-use tissue_viewer::app::gestures::{Gesture, Scene, view_input};
-use tissue_viewer::app::state::{Request, ToolKind};
 use tissue_core::mechanics::grid::Grid;
 use tissue_core::mechanics::material::Material;
-use tissue_viewer::render::camera::OrbitCamera;
-use tissue_viewer::render::mesh::SurfaceMesh;
 use tissue_core::sim::Tool;
 use tissue_core::sim::material_surface::compliance::ContactScratch;
 use tissue_studies::validate::continuum::cache::ContinuumCache;
 use tissue_studies::validate::continuum::{DEFAULT_TOLERANCE, Press};
+use tissue_viewer::app::gestures::{Gesture, Scene, view_input};
+use tissue_viewer::app::state::{Request, ToolKind};
+use tissue_viewer::render::camera::OrbitCamera;
+use tissue_viewer::render::mesh::SurfaceMesh;
 
 const WINDOW: [f32; 2] = [1280.0, 720.0];
 const PANEL: f32 = 380.0;
@@ -114,7 +114,7 @@ fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_m
         .expect("the surface compliance");
     let viewer = compliance.press(centre, radius, &mut ContactScratch::default()).expect("a press")[2];
     let mut kept = ContinuumCache::open(&material, dir.as_deref());
-    let press = Press::normal(at, radius, depth);
+    let press = Press::normal(at, radius).depth(depth);
     let truth = kept.force(&material, &press, DEFAULT_TOLERANCE, &mut |_| {}).expect("the material's force").force_n;
     kept.save();
     assert!((viewer / truth - 1.0).abs() < 0.07, "the viewer's {viewer} N against the material's {truth} N");
@@ -127,9 +127,9 @@ fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_m
 /// pixel) and its force the material's there within 7 %.
 #[test]
 fn the_viewers_press_recorded_replays_to_its_forces() {
-    use tissue_viewer::app::recording::Timeline;
     use tissue_core::sim::{Integrator, Model, Simulation};
     use tissue_studies::study::script::{Recorded, Script, run};
+    use tissue_viewer::app::recording::Timeline;
     let material = Material::object_a();
     let grid = Grid::paper();
     let model = Model::Lattice(tissue_core::sim::shipped::DEFAULT_TOPOLOGY);
@@ -181,7 +181,7 @@ fn the_viewers_press_recorded_replays_to_its_forces() {
     assert!(cmp.relative_l2 < 0.01, "{cmp:?}");
     let mut kept = ContinuumCache::open(&material, dir.as_deref());
     let at = [last.at[0], last.at[1], 0.1];
-    let press = Press::normal(at, 0.015, last.depth_m);
+    let press = Press::normal(at, 0.015).depth(last.depth_m);
     let truth = kept.force(&material, &press, DEFAULT_TOLERANCE, &mut |_| {}).expect("the material's force").force_n;
     kept.save();
     assert!((last.force_n / truth - 1.0).abs() < 0.07, "recorded {} N against the material's {truth} N", last.force_n);

@@ -139,7 +139,8 @@ fn script_bounds_are_named_before_any_work() {
     let s = script((0..200).map(|_| Action::Wait { duration_s: 100.0, record: false }).collect());
     let e = run(&s).expect_err("too many steps").to_string();
     assert!(e.contains("steps in all") && e.contains("bound"), "{e}");
-    let s = script((0..=tissue_studies::study::script::MAX_ACTIONS).map(|_| Action::Release { record: false }).collect());
+    let s =
+        script((0..=tissue_studies::study::script::MAX_ACTIONS).map(|_| Action::Release { record: false }).collect());
     assert!(run(&s).expect_err("too many actions").to_string().contains("actions"));
     let s = script((0..300).map(|_| Action::Release { record: true }).collect());
     assert!(run(&s).expect_err("too many recorded").to_string().contains("record"));

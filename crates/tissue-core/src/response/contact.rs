@@ -273,4 +273,38 @@ mod tests {
         s.candidates.extend([([0.0, 0.0, 1.0], 1e-3), ([0.0, 0.0, 1.0], 1e-3)]);
         assert_eq!(solve(&mut body, &mut s, 0.0), Err(ContactError::NotPositiveDefinite));
     }
+
+    proptest::proptest! {
+        /// For any positive definite compliance (diagonally dominant: each node's own compliance
+        /// above the sum of its couplings) and any gaps, from any warm start, the solve puts
+        /// every contact on the sphere, no contact pulls and no other candidate ends inside.
+        #[test]
+        fn a_contact_never_pulls(
+            own in proptest::collection::vec(1e-5f64..1e-3, 1..12),
+            coupling in 0.0f64..0.9,
+            gaps in proptest::collection::vec(-1e-3f64..1e-3, 12),
+            warm in proptest::collection::vec(proptest::bool::ANY, 12),
+        ) {
+            let n = own.len();
+            let least = own.iter().copied().fold(f64::INFINITY, f64::min);
+            // Row sums of the couplings c / (1 + |i - j|) stay below 2 c (1 + ln n): under `least`.
+            let c = coupling * least / (2.0 * (1.0 + (n as f64).ln()));
+            let mut body = Chain(own, c);
+            let mut s = ContactScratch::with_room(n);
+            s.candidates.extend(gaps[..n].iter().map(|&g| ([0.0, 0.0, 1.0], g)));
+            s.active = (0..n).filter(|&q| warm[q]).collect();
+            solve(&mut body, &mut s, 1e-15).expect("settles");
+            proptest::prop_assert!(s.lambda.iter().all(|&l| l >= 0.0), "{:?}", s.lambda);
+            for q in 0..n {
+                let moved: f64 =
+                    s.active.iter().zip(&s.lambda).map(|(&j, l)| l * body.normal(q, [0.0; 3], j, [0.0; 3])).sum();
+                if s.active.contains(&q) {
+                    proptest::prop_assert!((moved - gaps[q]).abs() < 1e-12, "{}: {} against {}", q, moved, gaps[q]);
+                } else {
+                    proptest::prop_assert!(moved >= gaps[q] - 1e-12, "{} ends inside", q);
+                }
+            }
+            proptest::prop_assert!(s.force()[2] <= 0.0, "the sphere is pushed out, never pulled in");
+        }
+    }
 }

@@ -36,6 +36,95 @@ const ON_SURFACE_M: f64 = 1e-6;
 pub const LIMITS: &str = "probe radius 5 to 50 mm, depth at most 3/4 of the radius, starting on or outside the \
                           tissue's surface, moving into it, not into a clamped face";
 
+/// One press: the sphere is tangent to the undeformed surface at `at` (a point of a free face,
+/// edge or corner) at depth 0 and moves `depth` into the tissue along `direction`, by default the
+/// inward normal there ([`centre`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Press {
+    /// The touched point on the free surface, metres.
+    pub at: [f64; 3],
+    /// Sphere radius, metres.
+    pub radius: f64,
+    /// Depth, metres.
+    pub depth: f64,
+    /// The unit pressing direction where it is not the inward normal at `at` (an oblique press).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f64; 3]>,
+}
+
+impl Press {
+    /// A press of a sphere of `radius` (metres) along the inward normal of the surface at `at`
+    /// (a point of a free face, edge or corner, metres), at depth 0: tangent there ([`Press::depth`]
+    /// sets how far it goes in).
+    pub fn normal(at: [f64; 3], radius: f64) -> Self {
+        Self { at, radius, depth: 0.0, direction: None }
+    }
+
+    /// A press of a sphere of `radius` touching the surface at `at` and moving along `direction`
+    /// (normalised here; an oblique press), at depth 0.
+    pub fn along(at: [f64; 3], direction: [f64; 3], radius: f64) -> Self {
+        let d = DVec3::from(direction);
+        let unit = if d.length() > 0.0 { (d / d.length()).to_array() } else { direction };
+        Self { at, radius, depth: 0.0, direction: Some(unit) }
+    }
+
+    /// The press `depth` metres in along its direction.
+    #[must_use]
+    pub fn depth(self, depth: f64) -> Self {
+        Self { depth, ..self }
+    }
+
+    /// The probe tool of this press (the sphere at its [`Press::centre`]).
+    pub fn tool(&self) -> crate::sim::Tool {
+        crate::sim::Tool::Probe { centre: self.centre(), radius: self.radius }
+    }
+
+    /// Checks the press: on the free surface, radius from 1 to 50 mm, depth from 0 to 0.8 of the
+    /// radius, a unit direction into the tissue.
+    pub fn check(&self) -> Result<(), String> {
+        let n = DVec3::from(free_face_normal(self.at)?);
+        if !(self.radius.is_finite() && (1e-3..=0.05).contains(&self.radius)) {
+            return Err(format!("probe radius {} m is outside 0.001 to 0.05 m", self.radius));
+        }
+        if !(self.depth.is_finite() && self.depth >= 0.0 && self.depth <= 0.8 * self.radius) {
+            return Err(format!("probe depth {} m is outside 0 to 0.8 of the radius", self.depth));
+        }
+        let d = DVec3::from(self.direction());
+        if !d.is_finite() || (d.length() - 1.0).abs() > 1e-9 || d.dot(n) >= -1e-9 {
+            return Err(format!("the press direction {d} is not a unit vector into the tissue at {:?}", self.at));
+        }
+        Ok(())
+    }
+
+    /// The sphere's centre, metres.
+    pub fn centre(&self) -> [f64; 3] {
+        centre(self.at, DVec3::from(self.direction()), self.radius, self.depth)
+    }
+
+    /// The pressing direction (by default the inward normal at `at`).
+    pub fn direction(&self) -> [f64; 3] {
+        self.direction.unwrap_or_else(|| free_face_normal(self.at).unwrap_or([0.0, 0.0, 1.0]).map(|c| -c))
+    }
+
+    /// The component of the tissue's `force` on the sphere against the pressing direction,
+    /// newtons: what pushes back.
+    pub fn force_along(&self, force: [f64; 3]) -> f64 {
+        -DVec3::from(force).dot(DVec3::from(self.direction()))
+    }
+}
+
+/// The outward normal of the free surface at `at` (a face's, or on an edge or corner the
+/// normalised sum of its faces'), or why there is none.
+pub fn free_face_normal(at: [f64; 3]) -> Result<[f64; 3], String> {
+    let l = CUBE_SIDE_M;
+    let n = outward_normal(at)
+        .ok_or_else(|| format!("the press point {at:?} is not on the surface of the cube [0, {l}]^3 m"))?;
+    if at[2] <= 1e-6 {
+        return Err(format!("the press point {at:?} is on the clamped face z = 0"));
+    }
+    Ok(n.to_array())
+}
+
 /// The outward normal of the tissue's surface at `at`: the normal of the face `at` lies on, or
 /// on an edge or corner the normalised sum of its faces' normals; `None` off the surface.
 pub fn outward_normal(at: [f64; 3]) -> Option<DVec3> {
@@ -234,6 +323,32 @@ impl Contact {
             Contact::Surface => "surface",
             Contact::Nodes => "nodes",
         }
+    }
+}
+
+/// One reading of the probe, all of one step: the tissue's force on the sphere, the press that
+/// put it there and the contact that produced the force. The library's
+/// `Simulation::probe`, the viewer's physics thread and the scripts give this one reading.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ProbeReading {
+    /// The tissue's force on the sphere, newtons (x, y, z).
+    pub force: [f64; 3],
+    /// Its component against the push (what pushes back), newtons.
+    pub force_n: f64,
+    /// How far the sphere is pressed in along its direction from touching the undeformed
+    /// surface, metres.
+    pub depth_m: f64,
+    /// The contact that produced the force.
+    pub contact: Contact,
+    /// Simulated time of the step, seconds.
+    pub time_s: f64,
+}
+
+impl ProbeReading {
+    /// The reading of `sim`'s last step under `press`.
+    pub fn of(sim: &super::Simulation, press: &Press) -> Self {
+        let force = sim.tool_force;
+        Self { force, force_n: press.force_along(force), depth_m: press.depth, contact: Contact::of(sim), time_s: sim.time_s }
     }
 }
 

@@ -160,7 +160,7 @@ pub fn view_input(
                 *gesture = Gesture::Probe { contact, dir, last_y: pos.y, depth };
                 let press = Press {
                     at: contact.as_dvec3().to_array(),
-                    direction: dir.as_dvec3().normalize().to_array().map(|v| v + 0.0),
+                    direction: Some(dir.as_dvec3().normalize().to_array().map(|v| v + 0.0)),
                     radius: scene.probe_radius_mm * 1e-3,
                     depth: f64::from(depth),
                 };

@@ -105,7 +105,12 @@ impl App {
             state.settings.tool = crate::app::state::ToolKind::Probe;
             let radius = state.settings.probe_radius_mm * 1e-3;
             let at = [x, y, crate::mechanics::grid::CUBE_SIDE_M];
-            requests.push(Request::Press(super::recording::Press { at, direction: [0.0, 0.0, -1.0], radius, depth }));
+            requests.push(Request::Press(super::recording::Press {
+                at,
+                direction: Some([0.0, 0.0, -1.0]),
+                radius,
+                depth,
+            }));
         }
         let grid = state.grid();
         // The physics thread builds the model from its recipe: none is built here.

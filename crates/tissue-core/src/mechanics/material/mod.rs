@@ -416,4 +416,26 @@ mod tests {
         let e = Material::orthotropic("x", Material::object_a().constants, 0.0).unwrap_err();
         assert!(e.to_string().contains("density"));
     }
+
+    proptest::proptest! {
+        /// For any orthotropic constants the material accepts, its stiffness is the inverse of its
+        /// compliance: `C S = I`.
+        #[test]
+        fn stiffness_times_compliance_is_the_identity(
+            e in proptest::array::uniform3(1e3f64..1e6),
+            nu in proptest::array::uniform3(0.0f64..0.45),
+            g in proptest::array::uniform3(1e3f64..1e6),
+        ) {
+            let constants = EngineeringConstants {
+                e1: e[0], e2: e[1], e3: e[2], nu12: nu[0], nu13: nu[1], nu23: nu[2], g12: g[0], g13: g[1], g23: g[2],
+            };
+            let Ok(m) = Material::orthotropic("any", constants, TISSUE_DENSITY) else {
+                // Constants whose stiffness is not positive definite are refused, not inverted.
+                return Ok(());
+            };
+            let product = m.stiffness * m.compliance;
+            let worst = (product - Matrix6::identity()).abs().max();
+            proptest::prop_assert!(worst < 1e-9, "C S - I up to {}", worst);
+        }
+    }
 }

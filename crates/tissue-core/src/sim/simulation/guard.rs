@@ -19,6 +19,14 @@ pub struct BlowUp {
     pub fatal: bool,
 }
 
+impl std::fmt::Display for BlowUp {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "simulation blew up at t = {:.4} s: {}", self.time_s, self.message)
+    }
+}
+
+impl std::error::Error for BlowUp {}
+
 /// Consecutive recoveries after which the guard stops a run ([`BlowUp::fatal`]).
 pub const MAX_RECOVERIES: u32 = 3;
 

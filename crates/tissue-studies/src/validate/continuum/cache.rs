@@ -247,8 +247,10 @@ impl ContinuumCache {
 }
 
 /// Taps shipped for the paper's objects.
-const SHIPPED_TAPS: [&str; 2] =
-    [include_str!("../../../../../assets/continuum/tap-A.json"), include_str!("../../../../../assets/continuum/tap-B.json")];
+const SHIPPED_TAPS: [&str; 2] = [
+    include_str!("../../../../../assets/continuum/tap-A.json"),
+    include_str!("../../../../../assets/continuum/tap-B.json"),
+];
 
 /// One material's kept taps (one per damping ratio): the file's contents.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -343,7 +345,7 @@ mod tests {
     /// An answer to a press no shipped file holds (made up: the file does not care).
     fn entry() -> Entry {
         Entry {
-            press: Press::normal([0.05, 0.05, 0.1], 0.0123, 0.001),
+            press: Press::normal([0.05, 0.05, 0.1], 0.0123).depth(0.001),
             tolerance: 0.01,
             result: ContinuumForce {
                 force: [0.0, 0.0, 1.25],

@@ -16,28 +16,10 @@ pub mod tap;
 
 use std::collections::HashMap;
 
-use glam::DVec3;
-
 use crate::mechanics::fem::graded::{GradedFem, GradedMesh};
-use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::mechanics::material::Material;
 use crate::response::contact;
-
-/// One press: the sphere is tangent to the undeformed surface at `at` (a point of a free face,
-/// edge or corner) at depth 0 and moves `depth` into the tissue along `direction`, by default the
-/// inward normal there ([`crate::sim::press::centre`]).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Press {
-    /// The touched point on the free surface, metres.
-    pub at: [f64; 3],
-    /// Sphere radius, metres.
-    pub radius: f64,
-    /// Depth, metres.
-    pub depth: f64,
-    /// The unit pressing direction where it is not the inward normal at `at` (an oblique press).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub direction: Option<[f64; 3]>,
-}
+pub use crate::sim::press::{Press, free_face_normal};
 
 /// The fine spacings tried, coarsest first, in units of the press's Hertz contact radius
 /// `sqrt(R d)` (at 15 mm and 2 mm: 2.0, 1.5, 1.125, 0.84, 0.63 and 0.47 mm; the last two only
@@ -49,58 +31,6 @@ pub const GROWTH: f64 = 1.45;
 pub const DEFAULT_TOLERANCE: f64 = 0.01;
 /// Surface nodes whose contact compliance is solved for in one batch.
 const BATCH_NODES: usize = 16;
-
-/// The outward normal of the free surface at `at` (a face's, or on an edge or corner the
-/// normalised sum of its faces'), or why there is none.
-pub fn free_face_normal(at: [f64; 3]) -> Result<[f64; 3], String> {
-    let l = CUBE_SIDE_M;
-    let n = crate::sim::press::outward_normal(at)
-        .ok_or_else(|| format!("the press point {at:?} is not on the surface of the cube [0, {l}]^3 m"))?;
-    if at[2] <= 1e-6 {
-        return Err(format!("the press point {at:?} is on the clamped face z = 0"));
-    }
-    Ok(n.to_array())
-}
-
-impl Press {
-    /// A press along the inward normal at `at`.
-    pub fn normal(at: [f64; 3], radius: f64, depth: f64) -> Self {
-        Self { at, radius, depth, direction: None }
-    }
-
-    /// Checks the press: on the free surface, radius from 1 to 50 mm, depth from 0 to 0.8 of the
-    /// radius, a unit direction into the tissue.
-    pub fn check(&self) -> Result<(), String> {
-        let n = DVec3::from(free_face_normal(self.at)?);
-        if !(self.radius.is_finite() && (1e-3..=0.05).contains(&self.radius)) {
-            return Err(format!("probe radius {} m is outside 0.001 to 0.05 m", self.radius));
-        }
-        if !(self.depth.is_finite() && self.depth >= 0.0 && self.depth <= 0.8 * self.radius) {
-            return Err(format!("probe depth {} m is outside 0 to 0.8 of the radius", self.depth));
-        }
-        let d = DVec3::from(self.direction());
-        if !d.is_finite() || (d.length() - 1.0).abs() > 1e-9 || d.dot(n) >= -1e-9 {
-            return Err(format!("the press direction {d} is not a unit vector into the tissue at {:?}", self.at));
-        }
-        Ok(())
-    }
-
-    /// The sphere's centre, metres.
-    pub fn centre(&self) -> [f64; 3] {
-        crate::sim::press::centre(self.at, DVec3::from(self.direction()), self.radius, self.depth)
-    }
-
-    /// The pressing direction (by default the inward normal at `at`).
-    pub fn direction(&self) -> [f64; 3] {
-        self.direction.unwrap_or_else(|| free_face_normal(self.at).unwrap_or([0.0, 0.0, 1.0]).map(|c| -c))
-    }
-
-    /// The component of the tissue's `force` on the sphere against the pressing direction,
-    /// newtons: what pushes back.
-    pub fn force_along(&self, force: [f64; 3]) -> f64 {
-        -DVec3::from(force).dot(DVec3::from(self.direction()))
-    }
-}
 
 /// The material's force on one press.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -251,7 +181,7 @@ mod tests {
         assert!(free_face_normal([0.05, 0.05, 0.1]).is_ok());
         assert!(free_face_normal([0.05, 0.05, 0.0]).is_err(), "face z = 0 is clamped");
         assert!(free_face_normal([0.05, 0.05, 0.05]).is_err());
-        let p = Press::normal([0.05, 0.05, 0.1], 0.015, 0.013);
+        let p = Press::normal([0.05, 0.05, 0.1], 0.015).depth(0.013);
         assert!(p.check().is_err());
     }
 
@@ -274,7 +204,7 @@ mod tests {
         };
         let material = Material::orthotropic("isotropic", constants, 1000.0).unwrap();
         let (r, d) = (0.015, 0.002);
-        let press = Press::normal([0.05, 0.05, 0.1], r, d);
+        let press = Press::normal([0.05, 0.05, 0.1], r).depth(d);
         let mut spacings = Vec::new();
         let out = press_force(&material, &press, DEFAULT_TOLERANCE, &mut |s| spacings.push(s)).unwrap();
         let hertz = 4.0 / 3.0 * e / (1.0 - nu * nu) * r.sqrt() * d.powf(1.5);

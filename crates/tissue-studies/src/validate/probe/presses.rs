@@ -149,7 +149,7 @@ pub fn lump_press_cases(material: &crate::mechanics::material::Material) -> Vec<
                 out.push(PressCase {
                     id: format!("press_lump{}_{what}_r{}_d{}", i + 1, radius * 1e3, depth * 1e3),
                     set: Set::Validation,
-                    press: Press::normal(at, radius, depth),
+                    press: Press::normal(at, radius).depth(depth),
                 });
             }
         }

@@ -13,31 +13,8 @@ use glam::DVec3;
 use crate::sim::{Integrator, Simulation, Tool};
 use crate::study::script::{Action, Contact, MAX_ACTION_S, PathKey, PathSample, path_at};
 
-/// A press as the hand makes it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Press {
-    /// The touched point of the undeformed surface, metres.
-    pub at: [f64; 3],
-    /// Push direction (unit).
-    pub direction: [f64; 3],
-    /// Radius, metres.
-    pub radius: f64,
-    /// Indentation along `direction`, metres.
-    pub depth: f64,
-}
-
-impl Press {
-    /// The sphere's centre ([`crate::sim::press::centre`], the direction normalised as a script's).
-    pub fn centre(&self) -> [f64; 3] {
-        let d = DVec3::from(self.direction);
-        crate::sim::press::centre(self.at, d / d.length(), self.radius, self.depth)
-    }
-
-    /// The probe tool of this press.
-    pub fn tool(&self) -> Tool {
-        Tool::Probe { centre: self.centre(), radius: self.radius }
-    }
-}
+/// A press as the hand makes it: the one press of scripts, the viewer and the library.
+pub use crate::sim::press::Press;
 
 /// Force samples per simulated second of a recorded probe path.
 pub const SAMPLE_HZ: f64 = 100.0;
@@ -149,7 +126,7 @@ impl Timeline {
         let glide = (glide_s / dt).round().max(1.0) * dt;
         if let Current::Probe { radius, direction, keys, .. } = &mut self.current
             && *radius == p.radius
-            && *direction == p.direction
+            && *direction == p.direction()
         {
             // From where the sphere is now (a glide not finished is cut short).
             let (at, depth) = path_at(keys, now);
@@ -165,7 +142,7 @@ impl Timeline {
         let key = PathKey { t: 0.0, at: p.at, depth: p.depth };
         self.current = Current::Probe {
             radius: p.radius,
-            direction: p.direction,
+            direction: p.direction(),
             keys: vec![key],
             now: (p.at, p.depth),
             next_sample: 0.0,
@@ -190,7 +167,7 @@ impl Timeline {
         if let Current::Probe { radius, direction, keys, now, .. } = &mut self.current {
             let (at, depth) = path_at(keys, (self.steps + 1) as f64 * sim.dt);
             *now = (at, depth);
-            let p = Press { at, direction: *direction, radius: *radius, depth };
+            let p = Press { at, direction: Some(*direction), radius: *radius, depth };
             sim.tool = p.tool();
         }
     }

@@ -35,7 +35,7 @@ fn a_recorded_interaction_replays_to_the_same_forces() {
     steps(&mut t, &mut sim, 300);
     let press = |k: f64| Press {
         at: [0.04 + 5e-4 * k, 0.05, 0.1],
-        direction: [0.0, 0.0, -1.0],
+        direction: Some([0.0, 0.0, -1.0]),
         radius: 0.015,
         depth: (2.5e-4 * k).min(0.004),
     };
@@ -102,7 +102,7 @@ fn a_recorded_interaction_replays_to_the_same_forces() {
 fn after_a_setting_changes_the_recording_starts_again_at_rest() {
     let mut sim = viewer_sim();
     let mut t = Timeline::new(true);
-    let p = Press { at: [0.05, 0.05, 0.1], direction: [0.0, 0.0, -1.0], radius: 0.015, depth: 0.003 };
+    let p = Press { at: [0.05, 0.05, 0.1], direction: Some([0.0, 0.0, -1.0]), radius: 0.015, depth: 0.003 };
     t.press(p, 1e-3, &mut sim);
     steps(&mut t, &mut sim, 500);
     t.setting_changed(&sim);

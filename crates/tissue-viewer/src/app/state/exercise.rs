@@ -69,7 +69,8 @@ mod tests {
     fn a_material_file_with_a_lump_runs_its_backgrounds_tissue_and_steps_and_feels_the_lump() {
         let (mut state, _) = ViewerState::new(|| {}).expect("the viewer state");
         state.settings.object = crate::app::settings::Source::File;
-        state.settings.material_path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/examples/lump_5x_r8.toml").into();
+        state.settings.material_path =
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/examples/lump_5x_r8.toml").into();
         state.handle(Request::LoadObject, &mut |_| {});
         // Its background is A's tissue: the shipped lattice runs, with nothing to say.
         assert_eq!(state.shown.note, None);

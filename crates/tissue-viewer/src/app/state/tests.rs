@@ -130,7 +130,7 @@ fn the_probe_gets_the_materials_surface_compliance_in_the_background() {
     // at first (a stiffer push), then it settles to the material's static force, about 9.7 N (A).
     let press = crate::app::recording::Press {
         at: [0.05, 0.05, 0.1],
-        direction: [0.0, 0.0, -1.0],
+        direction: Some([0.0, 0.0, -1.0]),
         radius: 0.015,
         depth: 0.004,
     };

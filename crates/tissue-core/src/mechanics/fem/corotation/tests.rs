@@ -238,3 +238,17 @@ fn the_dense_and_the_parity_products_turn_alike() {
         assert!((a - b).abs() <= 1e-12 * scale, "{a} vs {b}");
     }
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(32))]
+    /// Any rigid turn about z of any small grid gives no corotated force once the rotations have
+    /// converged.
+    #[test]
+    fn a_rigid_turn_gives_no_corotated_force(angle in -3.1f64..3.1, n in 2usize..6) {
+        let grid = Grid::new(n).unwrap();
+        let x = deformed(&grid, angle, 1.0, 0.0);
+        let (_, f) = node_forces(grid, &x, (60, 1e-13), false, false);
+        let worst = f.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        proptest::prop_assert!(worst < 1e-8, "force {} N on a rigid turn of {} rad", worst, angle);
+    }
+}

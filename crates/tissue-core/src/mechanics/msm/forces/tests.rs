@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::mechanics::grid::Grid;
-use crate::mechanics::msm::model::MsmParams;
+use crate::mechanics::msm::model::{MsmParams, Topology};
 
 /// A hex lattice with every family's stiffness distinct.
 fn hex_model(grid: Grid) -> MsmModel {
@@ -70,5 +70,37 @@ fn the_tangent_product_is_the_assembled_tangents() {
     assert!(scale > 1.0, "{scale}");
     for i in 0..3 * nn {
         assert!((out[i % 3][i / 3] - want[i]).abs() <= 1e-12 * scale, "dof {i}: {} vs {}", out[i % 3][i / 3], want[i]);
+    }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+    /// The springs' forces on any lattice at any positions sum to zero (each spring pushes its two
+    /// ends equally and oppositely), and so do their moments about the origin.
+    #[test]
+    fn spring_forces_sum_to_zero(
+        n in 2usize..6,
+        hex in proptest::bool::ANY,
+        seed in proptest::collection::vec(-1.0f64..1.0, 3 * 216),
+    ) {
+        let grid = Grid::new(n).unwrap();
+        let topology = if hex { Topology::Hex } else { Topology::Shear };
+        let params = MsmParams { k1: 900.0, k2: 1100.0, k3: 1300.0, ..MsmParams::unit(topology) };
+        let model = MsmModel::new(grid, params, 1040.0).unwrap();
+        let nn = grid.num_nodes();
+        let x: [Vec<f64>; 3] =
+            std::array::from_fn(|c| (0..nn).map(|p| grid.position(p)[c] + 5e-3 * seed[3 * p + c]).collect());
+        let mut f: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; nn]);
+        add_spring_forces(&model, &x, &mut f, &mut ForceScratch::new(&model));
+        let largest = f.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        for c in 0..3 {
+            let sum: f64 = f[c].iter().sum();
+            proptest::prop_assert!(sum.abs() <= 1e-9 * largest.max(1.0), "sum {} of component {}", sum, c);
+        }
+        let moment: [f64; 3] = std::array::from_fn(|c| {
+            let (a, b) = ((c + 1) % 3, (c + 2) % 3);
+            (0..nn).map(|p| x[a][p] * f[b][p] - x[b][p] * f[a][p]).sum()
+        });
+        proptest::prop_assert!(moment.iter().all(|m| m.abs() <= 1e-9 * largest.max(1.0)), "moment {:?}", moment);
     }
 }

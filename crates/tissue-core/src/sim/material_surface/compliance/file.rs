@@ -236,4 +236,27 @@ mod tests {
         format[8] = 3;
         assert_eq!(SurfaceCompliance::from_bytes(&format, &a, 2), Err(FileError::Format));
     }
+
+    proptest::proptest! {
+        /// Any compliance read back from its file is itself, and any one byte changed (to any
+        /// other value) is refused: never read as another compliance.
+        #[test]
+        fn a_kept_file_round_trips_and_any_one_byte_corruption_is_refused(
+            values in proptest::collection::vec(-1e-3f32..1e-3, 1..4),
+            at in 0usize..100_000,
+            flip in 1u8..=255,
+        ) {
+            let a = Material::object_a();
+            let lattice = super::super::lattice::Lattice::new(2);
+            let columns =
+                (0..lattice.values).map(|i| values[i % values.len()] * (1.0 + i as f32)).collect::<Vec<f32>>().into();
+            let c = SurfaceCompliance { lattice, columns, lump: None };
+            let bytes = c.to_bytes(&a);
+            proptest::prop_assert_eq!(SurfaceCompliance::from_bytes(&bytes, &a, 2), Ok(c));
+            let mut bad = bytes;
+            let at = at % bad.len();
+            bad[at] ^= flip;
+            proptest::prop_assert!(SurfaceCompliance::from_bytes(&bad, &a, 2).is_err(), "byte {} changed was read", at);
+        }
+    }
 }
