@@ -23,8 +23,14 @@ fn main() -> anyhow::Result<()> {
     })?;
     let p = result.params;
     println!(
-        "shear lattice of B: k1 = {:.1}, k2 = {:.1}, c12 = {:.1}, c23 = {:.1} N/m; cost {:.4e} m in {:.1} s",
-        p.k1, p.k2, p.c12, p.c23, result.cost, result.wall_s
+        "shear lattice of B: k1 = {:.1}, k2 = {:.1}, k3 = {:.1}, c12 = {:.1}, c23 = {:.1} N/m; cost {:.4e} m in {:.1} s",
+        p.k1,
+        p.k2,
+        p.k3,
+        p.c12.unwrap_or(0.0),
+        p.c23.unwrap_or(0.0),
+        result.cost,
+        result.wall_s
     );
     Ok(())
 }

@@ -22,3 +22,8 @@ pub(crate) use tissue_studies::{calibrate, study, validate};
 pub(crate) use tissue_viewer::{app, render};
 
 pub mod cli;
+
+/// The tests' own cache folder (`tests/support/test_cache.rs`).
+#[cfg(test)]
+#[path = "../tests/support/test_cache.rs"]
+mod test_cache;

@@ -1,5 +1,8 @@
 //! The physics steps allocate nothing once built (a counting global allocator checks it).
 
+#[path = "support/test_cache.rs"]
+mod test_cache;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 

@@ -1,6 +1,9 @@
 //! Hostile but fair input, one test per class: every input bounded and checked before the work
 //! starts, every failure one line that names its cause, nothing left behind.
 
+#[path = "support/test_cache.rs"]
+mod test_cache;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};

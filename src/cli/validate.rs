@@ -76,7 +76,7 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
     };
     DirectSolve::TouchBenchmark.check_grid(grid.n()).map_err(anyhow::Error::msg)?;
     if !own_mesh_only && !material.inclusions.is_empty() {
-        crate::validate::lumps::refinement(grid)?;
+        crate::validate::inclusions::refinement(grid)?;
     }
     // A cache folder given by name must be usable before any work.
     if let Some(dir) = &cache {
@@ -89,7 +89,7 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
         None
     } else {
         eprintln!("the model against the material with its inclusions: reference solves ...");
-        Some(crate::validate::lumps::evaluate(&material, model.0, model.1, grid)?)
+        Some(crate::validate::inclusions::evaluate(&material, model.0, model.1, grid)?)
     };
     let material = if own_mesh_only { None } else { Some(against_material(&material, grid, model, cache, contact)?) };
     if let Some(label) = label {
@@ -121,7 +121,7 @@ struct Full {
     material: Option<crate::validate::probe::score::MaterialReport>,
     /// For a material with inclusions: the model against the material with them.
     #[serde(skip_serializing_if = "Option::is_none")]
-    inclusions: Option<crate::validate::lumps::LumpReport>,
+    inclusions: Option<crate::validate::inclusions::InclusionReport>,
 }
 
 /// The probe presses of `model` against the material, the same-mesh FEM beside it.
@@ -145,7 +145,7 @@ fn against_material(
             let mut report = crate::sim::material_surface::stderr_report();
             let compliance =
                 crate::sim::material_surface::load_or_compute(material, dir.as_deref(), &mut |e| report.event(e))?;
-            let mut scratch = crate::sim::material_surface::compliance::ContactScratch::default();
+            let mut scratch = crate::sim::material_surface::compliance::SurfaceContactScratch::default();
             Box::new(move |press| probe_score::compliance_force_n(&compliance, &mut scratch, press))
         } else {
             Box::new(move |press| probe_score::responder_force_n(&mut responder, press))

@@ -4,7 +4,8 @@
 //! the run goes on with the answer in memory. Each refusal is one line naming the file and why.
 //!
 //! Computing a surface compliance takes about 40 s: the tests compute as few as they can, and
-//! copy a good file from the user's cache folder where there is one.
+//! copy a good file from the tests' own cache folder (`tests/support/test_cache.rs`) where there
+//! is one.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -60,7 +61,7 @@ fn cache_lines(err: &str) -> Vec<&str> {
     err.lines().filter(|l| l.starts_with("tissue-sim:")).collect()
 }
 
-/// Copies `material`'s surface compliance into `folder` from the user's cache folder where a
+/// Copies `material`'s surface compliance into `folder` from the tests' cache folder where a
 /// regular file there proves to be it; whether it did.
 fn copy_good(material: &Material, folder: &Path) -> bool {
     let Some(from) = tissue_core::io::cache_dir().map(|d| d.join(file_name(material))) else { return false };
@@ -84,6 +85,7 @@ fn close(a: f64, b: f64) -> bool {
 /// the one B's own compliance gives, and the line names the file. (ii) A megabyte of zeros in
 /// the middle of a file is refused by its checksum, and the file computed again.
 #[test]
+#[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn a_kept_compliance_is_used_only_where_it_proves_to_be_the_materials() {
     let home = tempfile::tempdir().expect("tempdir");
     let folder = home.path().join("tissue-sim");
@@ -108,11 +110,11 @@ fn a_kept_compliance_is_used_only_where_it_proves_to_be_the_materials() {
     let (again, err) = simulate(&script_b, home.path());
     assert!(cache_lines(&err).is_empty() && !err.contains("computing"), "{err}");
     assert!(close(again, force_b), "{again} against {force_b}");
-    // Where the user's cache folder holds a good compliance of B, it gives the same force.
+    // Where the tests' cache folder holds a good compliance of B, it gives the same force.
     let users = home.path().join("users");
     if copy_good(&b, &users.join("tissue-sim")) {
         let (kept, _) = simulate(&script_b, &users);
-        assert!(close(kept, force_b), "{force_b} N against the user's kept compliance's {kept} N");
+        assert!(close(kept, force_b), "{force_b} N against the kept compliance's {kept} N");
     }
 
     // (ii) A megabyte of zeros in the middle of B's file.
@@ -139,6 +141,7 @@ fn a_kept_compliance_is_used_only_where_it_proves_to_be_the_materials() {
 /// (iii) A FIFO in the file's place is never opened: the run does not block, says so in one
 /// line, computes the compliance in memory and leaves the FIFO as it was.
 #[test]
+#[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn a_fifo_in_the_files_place_does_not_block_the_run() {
     use std::os::unix::fs::FileTypeExt as _;
     let home = tempfile::tempdir().expect("tempdir");
@@ -187,6 +190,7 @@ fn a_fifo_in_the_files_place_does_not_block_the_run() {
 /// folder, one under a regular file): said in one line before the work, the run succeeds with
 /// the answer in memory, and nothing is written.
 #[test]
+#[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn a_cache_folder_that_cannot_keep_the_answer_is_said_before_the_work() {
     use std::os::unix::fs::PermissionsExt as _;
     let home = tempfile::tempdir().expect("tempdir");

@@ -3,6 +3,7 @@
 use crate::*;
 
 #[test]
+#[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn chart_then_choose_round_trip_and_bad_budgets() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("chart");

@@ -82,6 +82,7 @@ fn the_two_commands_are_the_ones_ci_and_the_binary_run() {
 }
 
 #[test]
+#[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn the_headless_commands_run_as_written() {
     let text = readme();
     let block = blocks(&section(&text, "Headless commands"), "bash");
@@ -174,8 +175,8 @@ fn the_layout_table_names_every_folder() {
     };
     let mut there = BTreeSet::new();
     for top in folders(&root()) {
-        if top == "src" {
-            there.extend(folders(&root().join("src")).into_iter().map(|s| format!("src/{s}")));
+        if top == "crates" {
+            there.extend(folders(&root().join("crates")).into_iter().map(|s| format!("crates/{s}")));
         } else {
             there.insert(top);
         }

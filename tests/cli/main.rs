@@ -1,5 +1,8 @@
 //! Command-line round trips and bad-input handling of the `tissue-sim` binary.
 
+#[path = "../support/test_cache.rs"]
+mod test_cache;
+
 use std::path::Path;
 use std::process::{Command, Output};
 

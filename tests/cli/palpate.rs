@@ -3,6 +3,7 @@
 use crate::*;
 
 #[test]
+#[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn palpate_maps_a_lump_and_writes_json_csv_and_png() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("map");

@@ -73,6 +73,7 @@ fn validate_prints_the_touch_benchmark_contract() {
 }
 
 #[test]
+#[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn dynamics_prints_the_contract_and_refuses_bad_input() {
     let o = run(&[
         "dynamics",

@@ -137,6 +137,7 @@ fn a_result_applies_to_a_running_model() {
 }
 
 #[test]
+#[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn hex_lattice_meets_the_richer_model_targets_at_10_newtons() {
     // The target: at 10 N the richer calibrated MSM has at most 1/3 of the paper model's
     // average and 2/3 of its maximum nodal error, on both objects. The paper model here is the

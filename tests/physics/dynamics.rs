@@ -40,6 +40,7 @@ fn measured_release_of_whole_models_matches_the_single_mode_closed_forms() {
 }
 
 #[test]
+#[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn reference_transients_converge_at_second_order() {
     let material = Material::object_b();
     let grid = Grid::paper();

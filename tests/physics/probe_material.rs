@@ -4,17 +4,18 @@
 //! smooth.
 
 use tissue_core::mechanics::material::Material;
-use tissue_core::sim::material_surface::compliance::{ContactScratch, DEFAULT_DIVISIONS, SurfaceCompliance};
+use tissue_core::sim::material_surface::compliance::{DEFAULT_DIVISIONS, SurfaceCompliance, SurfaceContactScratch};
 use tissue_studies::validate::continuum::DEFAULT_TOLERANCE;
 use tissue_studies::validate::continuum::cache::ContinuumCache;
 use tissue_studies::validate::probe::presses::press_cases;
 
 #[test]
+#[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn the_surface_compliance_feels_like_the_material_wherever_the_probe_lands() {
     for material in [Material::object_a(), Material::object_b()] {
         let compliance = SurfaceCompliance::compute(&material, DEFAULT_DIVISIONS, &mut |_| true).unwrap();
         let kept = ContinuumCache::open(&material, None);
-        let mut scratch = ContactScratch::default();
+        let mut scratch = SurfaceContactScratch::default();
         for case in press_cases() {
             let kept = kept.get(&case.press, DEFAULT_TOLERANCE).expect("the shipped continuum answers");
             let reference = kept.force_n;

@@ -10,7 +10,7 @@ use egui::{Event, PointerButton, Pos2, RawInput, Rect};
 use tissue_core::mechanics::grid::Grid;
 use tissue_core::mechanics::material::Material;
 use tissue_core::sim::Tool;
-use tissue_core::sim::material_surface::compliance::ContactScratch;
+use tissue_core::sim::material_surface::compliance::SurfaceContactScratch;
 use tissue_studies::validate::continuum::cache::ContinuumCache;
 use tissue_studies::validate::continuum::{DEFAULT_TOLERANCE, Press};
 use tissue_viewer::app::gestures::{Gesture, Scene, view_input};
@@ -112,7 +112,7 @@ fn the_probe_goes_in_along_the_normal_a_tenth_of_a_millimetre_a_pixel_with_the_m
     let dir = tissue_core::io::cache_dir();
     let compliance = tissue_core::sim::material_surface::load_or_compute(&material, dir.as_deref(), &mut |_| true)
         .expect("the surface compliance");
-    let viewer = compliance.press(centre, radius, &mut ContactScratch::default()).expect("a press")[2];
+    let viewer = compliance.press(centre, radius, &mut SurfaceContactScratch::default()).expect("a press")[2];
     let mut kept = ContinuumCache::open(&material, dir.as_deref());
     let press = Press::normal(at, radius).depth(depth);
     let truth = kept.force(&material, &press, DEFAULT_TOLERANCE, &mut |_| {}).expect("the material's force").force_n;

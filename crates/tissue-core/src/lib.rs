@@ -68,3 +68,8 @@ pub mod prelude {
         SimulationBuilder, Topology,
     };
 }
+
+/// The tests' own cache folder (`tests/support/test_cache.rs`).
+#[cfg(test)]
+#[path = "../../../tests/support/test_cache.rs"]
+mod test_cache;

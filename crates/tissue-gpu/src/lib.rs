@@ -61,3 +61,8 @@ impl Compute {
         }
     }
 }
+
+/// The tests' own cache folder (`tests/support/test_cache.rs`).
+#[cfg(test)]
+#[path = "../../../tests/support/test_cache.rs"]
+mod test_cache;

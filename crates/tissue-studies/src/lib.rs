@@ -17,3 +17,8 @@ pub(crate) use tissue_gpu as gpu;
 pub mod calibrate;
 pub mod study;
 pub mod validate;
+
+/// The tests' own cache folder (`tests/support/test_cache.rs`).
+#[cfg(test)]
+#[path = "../../../tests/support/test_cache.rs"]
+mod test_cache;

@@ -13,3 +13,8 @@ pub(crate) use tissue_studies::{calibrate, study, validate};
 
 pub mod app;
 pub mod render;
+
+/// The tests' own cache folder (`tests/support/test_cache.rs`).
+#[cfg(test)]
+#[path = "../../../tests/support/test_cache.rs"]
+mod test_cache;

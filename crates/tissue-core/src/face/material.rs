@@ -52,7 +52,7 @@ impl Material {
         self.inner.density
     }
 
-    /// How many inclusions (lumps of another stiffness) it holds.
+    /// How many inclusions (inclusions of another stiffness) it holds.
     pub fn inclusions(&self) -> usize {
         self.inner.inclusions.len()
     }

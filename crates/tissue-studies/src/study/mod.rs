@@ -11,6 +11,7 @@ pub mod bench;
 pub mod chart;
 pub mod choose;
 pub mod font;
+pub mod names;
 pub mod palpate;
 pub mod reproduce;
 pub mod script;

@@ -103,7 +103,7 @@ pub fn bisect_dt(guess: f64, mut stable: impl FnMut(f64) -> bool) -> f64 {
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct StabilityPoint {
     /// The model (`msm-axis`, `msm-hex`, `fem-linear` in files).
-    #[serde(serialize_with = "crate::study::chart::point::chart_names::serialize_model")]
+    #[serde(serialize_with = "crate::study::names::serialize_model")]
     pub model: crate::sim::Model,
     /// Nodes per axis.
     pub n: usize,

@@ -11,13 +11,14 @@
 //! - [`dynamic`]: the converged FEM transients of a scene and a running model's period, decay
 //!   and trajectory error against them (`dynamics`).
 //! - [`accuracy`]: the paper's cost and error tables of static answers (`errors`).
-//! - [`lumps`]: how well a model takes a material's inclusions, against the material.
+//! - [`inclusions`]: how well a model takes a material's inclusions, against the material.
 //!
 //! May use: [`crate::sim`], [`crate::response`], [`crate::mechanics`], [`crate::io`].
 
 pub mod accuracy;
 pub mod continuum;
 pub mod dynamic;
-pub mod lumps;
+pub mod inclusions;
 pub mod probe;
 pub mod touch;
+pub mod transient;

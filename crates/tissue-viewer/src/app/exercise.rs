@@ -25,14 +25,14 @@ pub struct Ranges {
 }
 
 impl Default for Ranges {
-    /// The clinical ranges: lumps 5 to 10 mm in radius, 5 to 20 mm deep, 2 to 10 times as stiff.
+    /// The clinical ranges: inclusions 5 to 10 mm in radius, 5 to 20 mm deep, 2 to 10 times as stiff.
     fn default() -> Self {
         Self { radius_mm: [5.0, 10.0], depth_mm: [5.0, 20.0], contrast: [2.0, 10.0] }
     }
 }
 
 /// The most a range reaches: radius and depth, millimetres; contrast.
-/// (The surface compliance's correction reaches [`REACH_M`](crate::sim::material_surface::compliance::lump::REACH_M)
+/// (The surface compliance's correction reaches [`REACH_M`](crate::sim::material_surface::compliance::inclusion::REACH_M)
 /// beyond a lump: a lump deeper than that under the top face would not be felt at all.)
 pub const LIMITS: Ranges = Ranges { radius_mm: [2.0, 15.0], depth_mm: [2.0, 20.0], contrast: [0.2, 20.0] };
 

@@ -104,7 +104,7 @@ impl Overlay {
                 max = Some(1.0);
                 self.ends.iter_mut().for_each(String::clear);
                 if show.map_contrast {
-                    self.title = "contrast: force over the force without lumps (palpation map)";
+                    self.title = "contrast: force over the force without inclusions (palpation map)";
                     let _ = write!(self.ends[0], "{:+.1} %", 100.0 * high);
                     let _ = write!(self.ends[1], "{:+.1} %", 100.0 * low);
                 } else {

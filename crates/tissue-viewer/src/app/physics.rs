@@ -117,6 +117,8 @@ pub struct Published {
     pub revision: u64,
     /// Whether the probe's force comes from the material's surface compliance.
     pub surface_probe: bool,
+    /// The probe's reading of the last step while it is pressed.
+    pub probe: Option<crate::sim::press::ProbeReading>,
 }
 
 /// The physics thread died (the channel is closed).
@@ -345,12 +347,14 @@ impl Clone for Published {
         into.tool_commands = p.tool_commands;
         into.revision = p.revision;
         into.surface_probe = p.surface_probe;
+        into.probe = p.probe;
     }
 }
 
 impl Published {
     /// Records the running simulation's state (the physics thread's one writer of it).
     fn record(&mut self, sim: &Simulation, rates: Rates, state: &Loop, totals: (u64, u64, f64)) {
+        self.probe = state.timeline.reading(sim);
         let p = self;
         let n = sim.tissue.grid().num_nodes();
         p.positions.resize(n, [0.0; 3]);

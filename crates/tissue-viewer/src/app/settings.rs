@@ -73,9 +73,9 @@ pub struct ViewSettings {
     /// Where `view --record` writes the recording.
     pub recording: Option<std::path::PathBuf>,
     /// What a hidden lump is drawn from (find the lump).
-    pub lump_ranges: crate::app::exercise::Ranges,
+    pub inclusion_ranges: crate::app::exercise::Ranges,
     /// The next hidden lump's seed.
-    pub lump_seed: u64,
+    pub inclusion_seed: u64,
     /// Colour the top face by the palpation map, once computed.
     pub show_map: bool,
     /// The map's colour is its contrast against the material without its inclusions, not its
@@ -108,8 +108,8 @@ impl Default for ViewSettings {
             nodes: crate::mechanics::grid::Grid::paper().n(),
             compute: crate::gpu::Compute::Cpu,
             recording: None,
-            lump_ranges: crate::app::exercise::Ranges::default(),
-            lump_seed: 1,
+            inclusion_ranges: crate::app::exercise::Ranges::default(),
+            inclusion_seed: 1,
             show_map: true,
             map_contrast: false,
         }
@@ -154,8 +154,8 @@ pub struct Shown {
     /// The running model's touch-benchmark scores (validation set), once computed, or why not.
     pub validation: Option<Result<crate::sim::shipped::RecordedScores, String>>,
     /// For a material with inclusions, the running model against the material with them
-    /// ([`crate::validate::lumps`]), once computed, or why not.
-    pub lump_validation: Option<Result<crate::validate::lumps::LumpReport, String>>,
+    /// ([`crate::validate::inclusions`]), once computed, or why not.
+    pub inclusion_validation: Option<Result<crate::validate::inclusions::InclusionReport, String>>,
     /// The tool held now (drawn over the tissue).
     pub tool: crate::sim::Tool,
     /// The probe's last position (centre, radius; metres), kept after it is let go.

@@ -167,9 +167,31 @@ impl App {
         }
     }
 
-    /// Writes the recording (`view --record FILE`); says what it wrote.
+    /// Writes the recording of the physics thread as the `simulate` script of the scene the
+    /// panel shows, to the file `view --record FILE` names; says what it wrote.
     fn save_recording(&self) -> anyhow::Result<String> {
-        super::recording::save(&self.physics, &self.state)
+        use anyhow::Context as _;
+        let Some(path) = &self.state.settings.recording else {
+            anyhow::bail!("nothing is recorded: start the viewer with --record FILE");
+        };
+        let (tx, rx) = std::sync::mpsc::channel();
+        let taken = self.physics.send(super::physics::Command::TakeRecording(tx)).is_ok();
+        let rec = rx
+            .recv_timeout(std::time::Duration::from_secs(5))
+            .ok()
+            .filter(|_| taken)
+            .context("recording not written: the physics thread did not hand it over")?;
+        let script = self.state.recording_script(rec).context("recording not written")?;
+        crate::io::write_json_atomic(path, &script)
+            .with_context(|| format!("recording not written to {}", path.display()))?;
+        let samples = script.recorded.as_ref().map_or(0, |r| r.force_path.len());
+        Ok(format!(
+            "recording: {} actions and {samples} force samples written to {} (replay: tissue-sim simulate --script {} \
+             --out FILE)",
+            script.actions.len(),
+            path.display(),
+            path.display()
+        ))
     }
 
     /// The egui pass: the panel and the 3D view's input.
@@ -229,8 +251,9 @@ impl App {
             self.trace.clear();
             return;
         };
-        let f = self.latest.tool_force;
-        self.trace.push(glam::DVec3::from(f).length() as f32);
+        // The physics thread's reading: the force against the push (|F| until its first one).
+        let f = self.latest.probe.map_or_else(|| glam::DVec3::from(self.latest.tool_force).length(), |r| r.force_n);
+        self.trace.push(f as f32);
         let aspect = rect.width() / rect.height().max(1.0);
         let c = glam::DVec3::from(centre).as_vec3();
         let clip = self.camera.view_proj(aspect) * c.extend(1.0);

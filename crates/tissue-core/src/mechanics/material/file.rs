@@ -1,12 +1,12 @@
 //! Reading a material from a TOML or JSON file ([`MaterialFile`]'s keys), inclusions included
-//! ([`crate::mechanics::inclusion`]).
+//! ([`super::inclusion_file`]).
 
 use std::path::Path;
 
 use serde::Deserialize;
 
 use super::{EngineeringConstants, Material, MaterialError, Symmetry, TISSUE_DENSITY};
-use crate::mechanics::inclusion::{self, InclusionFile};
+use super::inclusion_file::{self, InclusionFile};
 
 impl Material {
     /// Reads a material from a TOML or JSON file (chosen by extension; `.json` is JSON, anything
@@ -139,7 +139,7 @@ impl MaterialFile {
             }
         }?;
         let inclusions =
-            inclusion::read(&self.inclusion, &background.stiffness, self.units.as_deref()).map_err(parse)?;
+            inclusion_file::read(&self.inclusion, &background.stiffness, self.units.as_deref()).map_err(parse)?;
         Ok(Material { inclusions, ..background })
     }
 }

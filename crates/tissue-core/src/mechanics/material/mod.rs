@@ -11,6 +11,7 @@ use serde::Deserialize;
 use crate::mechanics::inclusion::Inclusion;
 
 mod file;
+pub mod inclusion_file;
 pub use file::MaterialFile;
 
 /// Density of the paper's tissue, kg/m^3.

@@ -241,7 +241,7 @@ pub struct MsmModel {
     /// axis lattice and the shear lattice).
     pub node_mass: f64,
     /// Mass of each node, kg: the cube's mass shared equally, except for the hex lattice, which
-    /// is assembled from elements and so lumps each element's mass onto its eight nodes (a
+    /// is assembled from elements and so inclusions each element's mass onto its eight nodes (a
     /// surface node carries less, as in the FEM's lumped masses).
     pub masses: Vec<f64>,
     /// The spring families with non-zero stiffness.

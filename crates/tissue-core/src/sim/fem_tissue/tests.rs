@@ -3,14 +3,14 @@ use super::*;
 
 #[test]
 fn the_component_wise_symplectic_steps_are_the_interleaved_ones_bit_for_bit() {
-    let mut lumpy = crate::mechanics::material::Material::object_a();
-    let stiffness = lumpy.stiffness * 5.0;
-    lumpy.inclusions.push(crate::mechanics::inclusion::Inclusion {
+    let mut with_inclusions = crate::mechanics::material::Material::object_a();
+    let stiffness = with_inclusions.stiffness * 5.0;
+    with_inclusions.inclusions.push(crate::mechanics::inclusion::Inclusion {
         centre: [0.06, 0.05, 0.07],
         radius: 0.012,
         stiffness,
     });
-    for material in [crate::mechanics::material::Material::object_a(), lumpy] {
+    for material in [crate::mechanics::material::Material::object_a(), with_inclusions] {
         component_wise_is_interleaved(&material);
     }
 }

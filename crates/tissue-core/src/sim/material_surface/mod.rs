@@ -29,7 +29,7 @@ use crate::io::cache::{CacheEvent, KeptFile, StderrReport};
 
 use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
-use compliance::{ComplianceError, ContactScratch, DEFAULT_DIVISIONS, MAX_CONTACT_NODES, SurfaceCompliance};
+use compliance::{ComplianceError, SurfaceContactScratch, DEFAULT_DIVISIONS, MAX_CONTACT_NODES, SurfaceCompliance};
 use modal_lag::{ModalBasis, ModalLag};
 
 /// Largest compliance file read back, bytes.
@@ -39,7 +39,7 @@ const MAX_FILE_BYTES: u64 = crate::io::MAX_OUTPUT_BYTES as u64;
 #[derive(Debug)]
 pub struct SurfaceProbe {
     compliance: Arc<SurfaceCompliance>,
-    scratch: ContactScratch,
+    scratch: SurfaceContactScratch,
     grid: Grid,
     last: Option<([f64; 3], f64)>,
     force: [f64; 3],
@@ -56,7 +56,7 @@ impl SurfaceProbe {
     pub fn new(compliance: Arc<SurfaceCompliance>, grid: Grid) -> Self {
         Self {
             compliance,
-            scratch: ContactScratch::default(),
+            scratch: SurfaceContactScratch::default(),
             grid,
             last: None,
             force: [0.0; 3],
@@ -224,15 +224,15 @@ impl MaterialSurface {
 
     /// [`MaterialSurface::load_or_compute`] with the compliance of the material's background
     /// beside it (the same where it has no inclusions, [`with_background`]); the inclusions'
-    /// correction kept in `dir` too where `keep_lump` (a lump of a file), or in memory only (a
+    /// correction kept in `dir` too where `keep_correction` (a lump of a file), or in memory only (a
     /// random lump of an exercise, seldom met again).
     pub fn with_background(
         material: &Material,
         dir: Option<&Path>,
-        keep_lump: bool,
+        keep_correction: bool,
         report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
     ) -> anyhow::Result<(Arc<SurfaceCompliance>, Self)> {
-        let (background, compliance) = with_background_as(material, dir, keep_lump, report)?;
+        let (background, compliance) = with_background_as(material, dir, keep_correction, report)?;
         // The background's modes: the inclusions change the slow modes little, and the force
         // held still is the compliance's, inclusions and all.
         let modes = Arc::new(ModalBasis::of_material(&material.background()).map_err(anyhow::Error::msg)?);
@@ -273,8 +273,8 @@ pub fn stderr_report() -> StderrReport {
 /// - a line where the write after the work fails: the computed answer is used all the same.
 ///
 /// A material with inclusions: its background's compliance so (the file is the background's),
-/// then the change its inclusions make ([`compliance::lump`], seconds), so too in a file of its
-/// own keyed by the whole material ([`compliance::lump::file`]; [`CacheEvent::Part`] and its
+/// then the change its inclusions make ([`compliance::inclusion`], seconds), so too in a file of its
+/// own keyed by the whole material ([`compliance::inclusion::file`]; [`CacheEvent::Part`] and its
 /// progress where it is computed).
 ///
 /// The errors are the computation's only: never the cache's.
@@ -296,43 +296,43 @@ pub fn with_background(
     with_background_as(material, dir, true, report)
 }
 
-/// [`with_background`], the inclusions' correction kept in `dir` only where `keep_lump`.
+/// [`with_background`], the inclusions' correction kept in `dir` only where `keep_correction`.
 fn with_background_as(
     material: &Material,
     dir: Option<&Path>,
-    keep_lump: bool,
+    keep_correction: bool,
     report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
 ) -> anyhow::Result<(Arc<SurfaceCompliance>, Arc<SurfaceCompliance>)> {
     let background = load_or_compute_background(&material.background(), dir, report)?;
     if material.inclusions.is_empty() {
         return Ok((Arc::clone(&background), background));
     }
-    let lump = load_or_compute_lump(material, &background, dir.filter(|_| keep_lump), report)?;
-    Ok((Arc::clone(&background), Arc::new((*background).clone().with_lump(lump))))
+    let lump = load_or_compute_correction(material, &background, dir.filter(|_| keep_correction), report)?;
+    Ok((Arc::clone(&background), Arc::new((*background).clone().with_correction(lump))))
 }
 
 /// The change `material`'s inclusions make to `background` (its background's compliance):
 /// from its file in `dir` where one is kept for this material, else computed (and kept there).
-fn load_or_compute_lump(
+fn load_or_compute_correction(
     material: &Material,
     background: &SurfaceCompliance,
     dir: Option<&Path>,
     report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
-) -> anyhow::Result<compliance::lump::LumpCorrection> {
-    use compliance::lump::LumpCorrection;
+) -> anyhow::Result<compliance::inclusion::InclusionCorrection> {
+    use compliance::inclusion::InclusionCorrection;
     const WHAT: &str = "the change the inclusions make";
     let (divisions, nodes) = background.lattice_size();
     let name = format!(
         "lump-correction-{:016x}.bin",
-        crate::io::cache_key((compliance::lump::file::LUMP_METHOD_VERSION, divisions), material.key().iter())
+        crate::io::cache_key((compliance::inclusion::file::INCLUSION_METHOD_VERSION, divisions), material.key().iter())
     );
     kept_or_computed(
         dir.map(|d| KeptFile::new(d, &name, WHAT)),
         report,
-        |bytes| LumpCorrection::from_bytes(bytes, material, divisions, nodes),
+        |bytes| InclusionCorrection::from_bytes(bytes, material, divisions, nodes),
         |kept_in, report| {
             report(CacheEvent::Part { what: WHAT, kept_in });
-            Ok(background.lump_of(material, &mut |f| report(CacheEvent::Progress(f)))?)
+            Ok(background.inclusion_of(material, &mut |f| report(CacheEvent::Progress(f)))?)
         },
         |lump| lump.to_bytes(material, divisions),
     )

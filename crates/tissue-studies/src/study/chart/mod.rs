@@ -33,7 +33,7 @@ use crate::mechanics::object::Object;
 use crate::mechanics::sparse::SparseError;
 pub use crate::response::single_mode::damped_explicit_limit;
 use crate::sim::Model;
-use crate::sim::material_surface::compliance::ContactScratch;
+use crate::sim::material_surface::compliance::SurfaceContactScratch;
 pub use crate::sim::shipped::msm_params_at;
 use crate::validate::continuum::cache::ContinuumCache;
 use crate::validate::probe::score::worst_validation_error;
@@ -126,7 +126,7 @@ fn surface_probe_figures(material: &Material, kept: &mut ContinuumCache) -> anyh
         crate::sim::material_surface::load_or_compute(material, crate::io::cache_dir().as_deref(), &mut |e| {
             report.event(e)
         })?;
-    let mut scratch = ContactScratch::default();
+    let mut scratch = SurfaceContactScratch::default();
     let worst = worst_validation_error(material, kept, &mut |press| {
         crate::validate::probe::score::compliance_force_n(&compliance, &mut scratch, press)
     })?;

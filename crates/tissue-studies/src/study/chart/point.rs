@@ -1,10 +1,10 @@
 //! One point of the speed-against-accuracy chart: a model, resolution, integrator and step, with
-//! its cost and its errors; the models charted; the names the chart's files give models and
-//! integrators.
+//! its cost and its errors; the models charted.
 
 use crate::mechanics::fem::dynamics::Formulation;
 use crate::mechanics::msm::Topology;
 use crate::sim::{Integrator, Model};
+pub use crate::study::names::integrator_chart_name;
 
 /// The models charted: every one but the paper's axis lattice, whose only calibration is on the
 /// paper's cases (the chart's static cases) and which the touch benchmark cannot score (no shear
@@ -16,65 +16,23 @@ pub const CHARTED: [Model; 4] = [
     Model::Fem(Formulation::Corotational),
 ];
 
-/// The integrator of a chart point in the chart's files: `explicit` (symplectic Euler),
-/// `implicit` (prefactored backward Euler) or `newmark` (prefactored trapezoidal rule).
-pub fn integrator_chart_name(integrator: Integrator) -> &'static str {
-    match integrator {
-        Integrator::Symplectic => "explicit",
-        Integrator::Implicit | Integrator::Prefactored => "implicit",
-        Integrator::Newmark => "newmark",
-    }
-}
-
-/// A chart point's model and integrator as the chart's files write them ([`Model::chart_name`],
-/// [`integrator_chart_name`]).
-pub(crate) mod chart_names {
-    use serde::{Deserialize as _, Deserializer, Serializer, de::Error as _};
-
-    use crate::sim::{Integrator, Model};
-
-    pub fn serialize_model<S: Serializer>(m: &Model, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(&m.chart_name())
-    }
-
-    pub fn deserialize_model<'de, D: Deserializer<'de>>(d: D) -> Result<Model, D::Error> {
-        let name = String::deserialize(d)?;
-        Model::from_chart_name(&name).ok_or_else(|| {
-            let known: Vec<String> = Model::ALL.iter().map(|k| k.chart_name()).collect();
-            D::Error::custom(format!("unknown model {name:?} (expected one of {})", known.join(", ")))
-        })
-    }
-
-    pub fn serialize_integrator<S: Serializer>(i: &Integrator, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(super::integrator_chart_name(*i))
-    }
-
-    pub fn deserialize_integrator<'de, D: Deserializer<'de>>(d: D) -> Result<Integrator, D::Error> {
-        // The chart's schemes, by the names [`super::integrator_chart_name`] gives them.
-        let name = String::deserialize(d)?;
-        [Integrator::Symplectic, Integrator::Prefactored, Integrator::Newmark]
-            .into_iter()
-            .find(|i| super::integrator_chart_name(*i) == name)
-            .ok_or_else(|| {
-                D::Error::custom(format!("unknown variant `{name}`, expected `explicit`, `implicit` or `newmark`"))
-            })
-    }
-}
-
 /// One point of the chart.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ChartPoint {
     /// The object.
     pub object: crate::mechanics::object::Object,
     /// The model (`msm-axis`, ..., `fem-corotational` in files).
-    #[serde(serialize_with = "chart_names::serialize_model", deserialize_with = "chart_names::deserialize_model")]
+    #[serde(
+        serialize_with = "crate::study::names::serialize_model",
+        deserialize_with = "crate::study::names::deserialize_model"
+    )]
     pub model: Model,
     /// Nodes per axis.
     pub n: usize,
     /// Symplectic Euler (`explicit` in files) or prefactored backward Euler (`implicit`).
     #[serde(
-        serialize_with = "chart_names::serialize_integrator",
-        deserialize_with = "chart_names::deserialize_integrator"
+        serialize_with = "crate::study::names::serialize_integrator",
+        deserialize_with = "crate::study::names::deserialize_integrator"
     )]
     pub integrator: Integrator,
     /// Wall time of one step, s.

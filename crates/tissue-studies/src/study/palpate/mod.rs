@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::mechanics::material::Material;
-use crate::sim::material_surface::compliance::{ContactScratch, SurfaceCompliance};
+use crate::sim::material_surface::compliance::{SurfaceCompliance, SurfaceContactScratch};
 use crate::sim::press;
 
 /// The contrast a hand tells apart: forces about 7 % apart.
@@ -125,7 +125,7 @@ impl Palpation {
     /// called after every press.
     pub fn forces(&self, compliance: &SurfaceCompliance, each: &mut dyn FnMut()) -> Result<Vec<f64>, String> {
         let n = self.face.normal();
-        let mut scratch = ContactScratch::default();
+        let mut scratch = SurfaceContactScratch::default();
         self.points()
             .into_iter()
             .map(|at| {

@@ -1,5 +1,5 @@
 //! The material's answer to the fast probe tap
-//! ([`crate::validate::dynamic::reference::tap_centre`]: the 15 mm sphere 4 mm into the top face
+//! ([`crate::validate::transient::tap_centre`]: the 15 mm sphere 4 mm into the top face
 //! and back in 20 ms along a `sin^2`): the linear hex8 FEM on graded meshes
 //! ([`crate::mechanics::fem::graded`], fine around the tap and capped far from it so that the
 //! cube's own motion is resolved too), lumped masses, mass-proportional damping of the ratio
@@ -22,8 +22,8 @@ use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::mechanics::material::Material;
 use crate::response::contact;
 use crate::validate::continuum::{GROWTH, SPACING_RATIOS};
-use crate::validate::dynamic::reference::{DURATION_S, TAP_DEPTH_M, TAP_DURATION_S, TAP_POINT, Trajectory, tap_centre};
 use crate::validate::touch::PROBE_RADIUS_M;
+use crate::validate::transient::{DURATION_S, TAP_DEPTH_M, TAP_DURATION_S, TAP_POINT, Trajectory, tap_centre};
 
 /// Converged when the force's history changes by less than this (relative L2 in time).
 pub const TAP_TOLERANCE: f64 = 0.01;

@@ -25,7 +25,7 @@ use crate::response::single_mode::{self, ModeMotion};
 use crate::sim::material_surface::MaterialSurface;
 use crate::sim::{Integrator, Model, Tissue};
 use crate::validate::continuum::tap::ContinuumTap;
-use crate::validate::dynamic::reference::{self as dynamic_reference, ReferenceTransient, Trajectory, Transient};
+use crate::validate::transient::{self as dynamic_reference, ReferenceTransient, Trajectory, Transient};
 
 /// Largest displacement of the release shape, m (small: every model is near linear).
 pub const RELEASE_AMPLITUDE_M: f64 = 5e-4;

@@ -4,4 +4,5 @@
 //! ([`measure`], `dynamics`).
 
 pub mod measure;
-pub mod reference;
+/// The reference transients, [`crate::validate::transient`].
+pub use super::transient as reference;

@@ -111,7 +111,7 @@ pub fn press_cases() -> Vec<PressCase> {
 }
 
 /// The probe of the presses over inclusions: radius and depth, metres (what a hand feels with).
-const LUMP_PROBES: [(f64, f64); 2] = [(0.015, 0.004), (0.010, 0.003)];
+const INCLUSION_PROBES: [(f64, f64); 2] = [(0.015, 0.004), (0.010, 0.003)];
 /// How far from the point over an inclusion's centre the press away from it is, beyond its
 /// radius, metres.
 const AWAY_M: f64 = 0.025;
@@ -121,7 +121,7 @@ const AWAY_M: f64 = 0.025;
 /// 4 mm deep over its centre, over its rim and 25 mm beyond the rim (along the face, towards the
 /// cube's middle; left out where that is off the face), and the 10 mm probe 3 mm deep over its
 /// centre.
-pub fn lump_press_cases(material: &crate::mechanics::material::Material) -> Vec<PressCase> {
+pub fn inclusion_press_cases(material: &crate::mechanics::material::Material) -> Vec<PressCase> {
     let l = CUBE_SIDE_M;
     let mut out = Vec::new();
     for (i, inclusion) in material.inclusions.iter().enumerate() {
@@ -138,7 +138,7 @@ pub fn lump_press_cases(material: &crate::mechanics::material::Material) -> Vec<
             p[tangent] = c[tangent] + towards_middle * shift;
             (0.001..=l - 0.001).contains(&p[tangent]).then_some(p)
         };
-        let (r15, r10) = (LUMP_PROBES[0], LUMP_PROBES[1]);
+        let (r15, r10) = (INCLUSION_PROBES[0], INCLUSION_PROBES[1]);
         for (what, shift, (radius, depth)) in [
             ("over", 0.0, r15),
             ("rim", inclusion.radius, r15),
@@ -177,7 +177,7 @@ mod tests {
     }
 
     #[test]
-    fn lump_presses_sit_on_the_nearest_free_face_over_rim_and_away() {
+    fn inclusion_presses_sit_on_the_nearest_free_face_over_rim_and_away() {
         let mut material = crate::mechanics::material::Material::object_a();
         let stiffness = material.stiffness * 5.0;
         material.inclusions.push(crate::mechanics::inclusion::Inclusion {
@@ -190,7 +190,7 @@ mod tests {
             radius: 0.006,
             stiffness,
         });
-        let cases = lump_press_cases(&material);
+        let cases = inclusion_press_cases(&material);
         assert_eq!(cases.len(), 8);
         for c in &cases {
             c.press.check().unwrap();

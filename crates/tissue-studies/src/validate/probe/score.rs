@@ -64,7 +64,7 @@ pub fn responder_force_n(responder: &mut Responder, press: &Press) -> anyhow::Re
 /// The force along the press's direction with the material's surface compliance as contact.
 pub fn compliance_force_n(
     compliance: &crate::sim::material_surface::compliance::SurfaceCompliance,
-    scratch: &mut crate::sim::material_surface::compliance::ContactScratch,
+    scratch: &mut crate::sim::material_surface::compliance::SurfaceContactScratch,
     press: &Press,
 ) -> anyhow::Result<f64> {
     Ok(press.force_along(compliance.press(press.centre(), press.radius, scratch)?))
@@ -84,7 +84,8 @@ pub fn evaluate(
     progress: &mut dyn FnMut(usize, usize, &PressCase, f64),
 ) -> anyhow::Result<MaterialReport> {
     // A material with inclusions is scored over them, at their rims and away from them.
-    let cases = if material.inclusions.is_empty() { press_cases() } else { super::presses::lump_press_cases(material) };
+    let cases =
+        if material.inclusions.is_empty() { press_cases() } else { super::presses::inclusion_press_cases(material) };
     let mut scores = Vec::with_capacity(cases.len());
     let mut missing = Vec::new();
     for (i, case) in cases.iter().enumerate() {

@@ -9,7 +9,7 @@ use glam::DVec3;
 use crate::mechanics::cases::LoadCase;
 use crate::sim::material_surface::MaterialSurface;
 use crate::sim::{Integrator, Tissue, Tool};
-use crate::validate::dynamic::reference::{self as dynamic_reference, Trajectory};
+use crate::validate::transient::{self as dynamic_reference, Trajectory};
 
 /// Most steps of one tap run.
 const MAX_STEPS: usize = 400_000;

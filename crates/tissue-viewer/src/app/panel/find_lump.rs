@@ -16,13 +16,13 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
     map_row(ui, settings, shown, requests);
     let Some(e) = &shown.exercise else {
         ui.label("A lump is hidden under the top face, drawn from these ranges:");
-        let r = &mut settings.lump_ranges;
+        let r = &mut settings.inclusion_ranges;
         range(ui, "radius (mm)", &mut r.radius_mm, LIMITS.radius_mm, 0.5);
         range(ui, "top under the face (mm)", &mut r.depth_mm, LIMITS.depth_mm, 0.5);
         range(ui, "stiffness (x the tissue)", &mut r.contrast, LIMITS.contrast, 0.1);
         ui.horizontal(|ui| {
             ui.label("seed");
-            ui.add(egui::DragValue::new(&mut settings.lump_seed));
+            ui.add(egui::DragValue::new(&mut settings.inclusion_seed));
             if ui.button("Hide a lump").clicked() {
                 requests.push(Request::HideLump);
             }
@@ -122,7 +122,7 @@ fn map_row(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reques
             let mut line = format!("map of the {} face: {low:.2} to {high:.2} N", m.map.face);
             if let Some((peak, at)) = m.map.peak().filter(|_| !m.map.inclusions.is_empty()) {
                 line.push_str(&format!(
-                    "; largest contrast against the tissue without its lumps {:+.1} % at ({:.0}, {:.0}, {:.0}) mm, \
+                    "; largest contrast against the tissue without its inclusions {:+.1} % at ({:.0}, {:.0}, {:.0}) mm, \
                      beyond 7 % at {} of {} points",
                     100.0 * peak,
                     at[0] * 1e3,

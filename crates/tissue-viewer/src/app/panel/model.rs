@@ -55,8 +55,8 @@ fn validation(ui: &mut egui::Ui, shown: &Shown, requests: &mut Vec<Request>) {
 }
 
 /// For a material with inclusions: the running model against the material with them, over each.
-fn lump_validation(ui: &mut egui::Ui, shown: &Shown) {
-    match &shown.lump_validation {
+fn inclusion_validation(ui: &mut egui::Ui, shown: &Shown) {
+    match &shown.inclusion_validation {
         None if !shown.inclusions.is_empty() => {
             ui.label("with its inclusions: computing the material's answer...");
         }
@@ -69,7 +69,7 @@ fn lump_validation(ui: &mut egui::Ui, shown: &Shown) {
                 ui.label(format!(
                     "{}: a {} N pressure over it sinks {:.1} % less with it, the material {:.1} % (field error {:.1} %)",
                     c.id.trim_start_matches("pressure_").trim_end_matches("_over"),
-                    crate::validate::lumps::PRESSURE_FORCE_N,
+                    crate::validate::inclusions::PRESSURE_FORCE_N,
                     -100.0 * c.model_effect,
                     -100.0 * c.material_effect,
                     100.0 * c.field_error
@@ -152,7 +152,7 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
     resolution(ui, settings, requests);
     compute(ui, settings, requests);
     validation(ui, shown, requests);
-    lump_validation(ui, shown);
+    inclusion_validation(ui, shown);
     if shown.fem.is_some() {
         ui.label(
             "The hex8 FEM (the reference itself): no spring parameters; damped by the ratio set under Integrator.",

@@ -40,8 +40,10 @@ pub fn show(
     let norm = DVec3::from(f).length();
     if settings.tool == ToolKind::Probe {
         // The number beside the sphere, said once.
-        let depth = shown.force_depth.last().map_or(0.0, |s| s[0]);
-        ui.label(format!("probe force {norm:.2} N at {depth:.1} mm indentation"));
+        match ctx.published.probe {
+            Some(r) => ui.label(format!("probe force {:.2} N at {:.1} mm indentation", r.force_n, r.depth_m * 1e3)),
+            None => ui.label(format!("probe force {norm:.2} N")),
+        };
         ui.label(contact_line(shown, ctx));
     } else {
         ui.label(format!("force on tool: |F| = {norm:.4} N  ({:.4}, {:.4}, {:.4})", f[0], f[1], f[2]));
@@ -151,8 +153,9 @@ fn contact_line(shown: &Shown, ctx: &PanelContext<'_>) -> String {
     match (&shown.contact_status, ctx.published.surface_probe) {
         (Some(status), _) => status.clone(),
         (None, true) => {
-            let lumps = shown.inclusions.len() + usize::from(shown.exercise.is_some());
-            let felt = if lumps > 0 { format!("; its {lumps} inclusion(s) felt within 3 %") } else { String::new() };
+            let inclusions = shown.inclusions.len() + usize::from(shown.exercise.is_some());
+            let felt =
+                if inclusions > 0 { format!("; its {inclusions} inclusion(s) felt within 3 %") } else { String::new() };
             format!(
                 "probe contact: the material's surface compliance (every free face, 2 mm grid, 1 mm across the edges; \
                  within 3.6 % of the material on every scored press{felt}) with its 192 lowest modes (inertia and \

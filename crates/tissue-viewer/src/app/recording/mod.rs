@@ -10,6 +10,7 @@
 
 use glam::DVec3;
 
+use crate::sim::press::ProbeReading;
 use crate::sim::{Integrator, Simulation, Tool};
 use crate::study::script::{Action, Contact, MAX_ACTION_S, PathKey, PathSample, path_at};
 
@@ -172,6 +173,16 @@ impl Timeline {
         }
     }
 
+    /// The probe's reading of the last step while the sphere is pressed: its force, its
+    /// component against the push, the depth the sphere is at and the contact.
+    pub fn reading(&self, sim: &Simulation) -> Option<ProbeReading> {
+        let Current::Probe { radius, direction, now, .. } = &self.current else { return None };
+        matches!(sim.tool, Tool::Probe { .. }).then(|| {
+            let p = Press { at: now.0, direction: Some(*direction), radius: *radius, depth: now.1 };
+            ProbeReading::of(sim, &p)
+        })
+    }
+
     /// After a step: counted, and the probe's force sampled when due (as a script samples it).
     pub fn after_step(&mut self, sim: &Simulation) {
         let dt = sim.dt;
@@ -287,33 +298,6 @@ impl Timeline {
         self.close(dt);
         self.current = next;
     }
-}
-
-/// Writes the recording of `physics` as the `simulate` script of the scene `state` shows, to
-/// the file `view --record` names; says what it wrote.
-pub fn save(physics: &super::physics::PhysicsThread, state: &super::state::ViewerState) -> anyhow::Result<String> {
-    use anyhow::Context as _;
-    let Some(path) = &state.settings.recording else {
-        anyhow::bail!("nothing is recorded: start the viewer with --record FILE");
-    };
-    let (tx, rx) = std::sync::mpsc::channel();
-    let taken = physics.send(super::physics::Command::TakeRecording(tx)).is_ok();
-    let rec = rx
-        .recv_timeout(std::time::Duration::from_secs(5))
-        .ok()
-        .filter(|_| taken)
-        .context("recording not written: the physics thread did not hand it over")?;
-    let script = state.recording_script(rec).context("recording not written")?;
-    crate::io::write_json_atomic(path, &script)
-        .with_context(|| format!("recording not written to {}", path.display()))?;
-    let samples = script.recorded.as_ref().map_or(0, |r| r.force_path.len());
-    Ok(format!(
-        "recording: {} actions and {samples} force samples written to {} (replay: tissue-sim simulate --script {} \
-         --out FILE)",
-        script.actions.len(),
-        path.display(),
-        path.display()
-    ))
 }
 
 #[cfg(test)]

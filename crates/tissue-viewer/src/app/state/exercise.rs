@@ -9,11 +9,16 @@ use crate::mechanics::grid::CUBE_SIDE_M;
 impl ViewerState {
     /// Hides a new lump under the top face, drawn from the settings' ranges and seed (the next
     /// seed is one more).
-    pub(super) fn hide_lump(&mut self) {
-        match hide(&self.shown.material, &self.shown.inclusions, &self.settings.lump_ranges, self.settings.lump_seed) {
+    pub(super) fn hide_inclusion(&mut self) {
+        match hide(
+            &self.shown.material,
+            &self.shown.inclusions,
+            &self.settings.inclusion_ranges,
+            self.settings.inclusion_seed,
+        ) {
             Ok(lump) => {
                 self.shown.exercise = Some(Exercise { lump, ready: None, mark: None, felt: None });
-                self.settings.lump_seed = self.settings.lump_seed.wrapping_add(1);
+                self.settings.inclusion_seed = self.settings.inclusion_seed.wrapping_add(1);
                 self.start_compliance();
             }
             Err(why) => self.shown.note = Some(why),
@@ -22,7 +27,7 @@ impl ViewerState {
 
     /// Marks the hidden lump under the probe's last press (its centre's point on the top face),
     /// once the probe feels it; the panel then reveals it.
-    pub(super) fn mark_lump(&mut self) {
+    pub(super) fn mark_inclusion(&mut self) {
         let Some(e) = self.shown.exercise.as_mut() else { return };
         let (Some(ready), None) = (e.ready, e.mark) else { return };
         match self.shown.last_probe {
@@ -48,7 +53,7 @@ mod tests {
         let mut sent = Vec::new();
         state.handle(Request::HideLump, &mut |c| sent.push(c));
         let e = state.shown.exercise.clone().expect("a lump hidden");
-        assert_eq!((e.lump.seed, state.settings.lump_seed), (1, 2));
+        assert_eq!((e.lump.seed, state.settings.inclusion_seed), (1, 2));
         assert_eq!(state.shown.felt_material().inclusions, vec![e.lump.inclusion.clone()]);
         assert!(state.shown.modelled_material().inclusions.is_empty(), "the model does not show the hidden lump");
         // Not yet felt: no mark.

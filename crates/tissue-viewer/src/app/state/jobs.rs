@@ -8,7 +8,7 @@ use crate::app::exercise::FELT_DEPTH_M;
 use crate::io::cache::CacheEvent;
 use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::sim::material_surface::MaterialSurface;
-use crate::sim::material_surface::compliance::{ContactScratch, SurfaceCompliance};
+use crate::sim::material_surface::compliance::{SurfaceCompliance, SurfaceContactScratch};
 use crate::study::palpate::{Face, Palpation, PalpationMap};
 
 use super::super::calibration_job;
@@ -49,7 +49,7 @@ fn pressed_face(centre: [f64; 3]) -> Face {
 #[derive(Debug)]
 pub(super) enum Scored {
     Touch(Result<crate::sim::shipped::RecordedScores, String>),
-    Lumps(Result<crate::validate::lumps::LumpReport, String>),
+    Inclusions(Result<crate::validate::inclusions::InclusionReport, String>),
 }
 
 impl ViewerState {
@@ -67,7 +67,7 @@ impl ViewerState {
         }
         let material = self.shown.felt_material();
         // A hidden lump's correction lives in memory only (random, seldom met again).
-        let keep_lump = self.shown.exercise.is_none();
+        let keep_correction = self.shown.exercise.is_none();
         // Find the lump: what the probe can feel of it, pressed over its centre.
         let over = self.shown.exercise.as_ref().map(|e| {
             let c = e.lump.inclusion.centre;
@@ -82,8 +82,8 @@ impl ViewerState {
             move |ctx| {
                 let dir = crate::io::cache_dir();
                 // Stopped within a batch when the viewer closes or the material changes.
-                let r =
-                    MaterialSurface::with_background(&material, dir.as_deref(), keep_lump, &mut |event| match event {
+                let r = MaterialSurface::with_background(&material, dir.as_deref(), keep_correction, &mut |event| {
+                    match event {
                         CacheEvent::Progress(f) => {
                             ctx.send(ComplianceMessage::Progress(f));
                             !ctx.cancelled()
@@ -101,11 +101,12 @@ impl ViewerState {
                             ctx.send(ComplianceMessage::Stage(what.into()));
                             true
                         }
-                    });
+                    }
+                });
                 let r = r.map_err(|e| format!("{e:#}")).and_then(|(background, surface)| {
                     let felt = match over {
                         Some((centre, radius)) => {
-                            let mut scratch = ContactScratch::default();
+                            let mut scratch = SurfaceContactScratch::default();
                             let mut press = |c: &SurfaceCompliance| {
                                 c.press(centre, radius, &mut scratch).map(|f| f[2]).map_err(|e| e.to_string())
                             };
@@ -174,7 +175,7 @@ impl ViewerState {
         }
         self.validation_stale = false;
         self.shown.validation = None;
-        self.shown.lump_validation = None;
+        self.shown.inclusion_validation = None;
         let (material, grid) = (self.shown.modelled_material(), self.grid);
         let model = self.model_under_test();
         let wake = Arc::clone(&self.wake);
@@ -199,17 +200,17 @@ impl ViewerState {
                 }
                 let r = if touched {
                     let stop = || ctx.cancelled();
-                    crate::validate::lumps::evaluate_until(&material, model.0, Some(model.1), grid, &stop)
+                    crate::validate::inclusions::evaluate_until(&material, model.0, Some(model.1), grid, &stop)
                         .map_err(|e| format!("{e:#}"))
                 } else {
                     Err("not scored (the touch validation failed)".into())
                 };
-                ctx.send(Scored::Lumps(r));
+                ctx.send(Scored::Inclusions(r));
             },
         );
         if let Err(e) = started {
             self.shown.validation = Some(Err(e.to_string()));
-            self.shown.lump_validation = Some(Err(e.to_string()));
+            self.shown.inclusion_validation = Some(Err(e.to_string()));
         }
     }
 

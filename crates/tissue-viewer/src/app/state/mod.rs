@@ -74,7 +74,7 @@ pub enum Request {
     ProbeStarted,
     /// A probe force sample (depth mm, force N) for the force-depth plot.
     ForceSample([f64; 2]),
-    /// Find the lump: hide a new one ([`ViewSettings::lump_ranges`], [`ViewSettings::lump_seed`]).
+    /// Find the lump: hide a new one ([`ViewSettings::inclusion_ranges`], [`ViewSettings::inclusion_seed`]).
     HideLump,
     /// Mark the hidden lump where the probe last pressed, and reveal it.
     MarkLump,
@@ -163,7 +163,7 @@ impl ViewerState {
                 force_depth: Vec::new(),
                 fem: None,
                 validation: None,
-                lump_validation: None,
+                inclusion_validation: None,
                 tool: Tool::None,
                 last_probe: None,
                 fem_probe: None,
@@ -289,8 +289,8 @@ impl ViewerState {
                 Some(last) if (last[0] - s[0]).abs() <= 0.05 => last[1] = s[1],
                 _ => self.shown.force_depth.push(s),
             },
-            Request::HideLump => self.hide_lump(),
-            Request::MarkLump => self.mark_lump(),
+            Request::HideLump => self.hide_inclusion(),
+            Request::MarkLump => self.mark_inclusion(),
             Request::EndExercise => {
                 if self.shown.exercise.take().is_some() {
                     self.start_compliance();
@@ -368,11 +368,11 @@ impl ViewerState {
         let shown = &mut self.shown;
         let ended = self.validation.poll(|r| match r {
             jobs::Scored::Touch(r) => shown.validation = Some(r),
-            jobs::Scored::Lumps(r) => shown.lump_validation = Some(r),
+            jobs::Scored::Inclusions(r) => shown.inclusion_validation = Some(r),
         });
         if let Some(State::Stopped(why)) = ended {
             self.shown.validation = Some(Err(format!("stopped unexpectedly ({why})")));
-            self.shown.lump_validation = Some(Err(format!("stopped unexpectedly ({why})")));
+            self.shown.inclusion_validation = Some(Err(format!("stopped unexpectedly ({why})")));
         }
         if self.validation_stale && !self.validation.busy() {
             self.start_validation();

@@ -145,7 +145,7 @@ fn a_settled_rotation_is_within_the_tolerance() {
             })
             .collect();
         let settled =
-            with_corotation(grid, &x, (crate::mechanics::fem::dynamics::ROTATION_ITERATIONS, 1e-8), false, |at, _| {
+            with_corotation(grid, &x, (super::ROTATION_ITERATIONS, 1e-8), false, |at, _| {
                 let mut next = vec![[0.0; 4]; start.len()];
                 let mut out: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; grid.num_nodes()]);
                 at.all(&start, &mut next, &mut out, false);
@@ -170,7 +170,7 @@ fn every_element_has_the_same_bits_in_any_lane_and_on_any_split() {
     // 13 elements a row: three groups of four and one overlapping; 6: one and one overlapping.
     // Two iterations for all; then to the step's tolerance from the identity, where the
     // elements of a group stop after different numbers of iterations.
-    let to_tolerance = (crate::mechanics::fem::dynamics::ROTATION_ITERATIONS, 1e-8);
+    let to_tolerance = (super::ROTATION_ITERATIONS, 1e-8);
     for (n, turn) in [(7, TWO), (14, TWO), (7, to_tolerance), (14, to_tolerance)] {
         let grid = Grid::new(n).unwrap();
         let x = deformed(&grid, 0.2, 1.05, 1e-3);

@@ -156,7 +156,7 @@ impl SurfaceCompliance {
         if columns.iter().any(|v| !v.is_finite()) {
             return Err(FileError::NotFinite);
         }
-        Ok(Self { lattice, columns: columns.into(), lump: None })
+        Ok(Self { lattice, columns: columns.into(), correction: None })
     }
 }
 
@@ -168,7 +168,7 @@ mod tests {
     fn small() -> SurfaceCompliance {
         let lattice = super::super::lattice::Lattice::new(2);
         let columns = (0..lattice.values).map(|i| 1e-6 * i as f32).collect::<Vec<f32>>().into();
-        SurfaceCompliance { lattice, columns, lump: None }
+        SurfaceCompliance { lattice, columns, correction: None }
     }
 
     /// `bytes` with the checksum made to match again (a file written so).
@@ -250,7 +250,7 @@ mod tests {
             let lattice = super::super::lattice::Lattice::new(2);
             let columns =
                 (0..lattice.values).map(|i| values[i % values.len()] * (1.0 + i as f32)).collect::<Vec<f32>>().into();
-            let c = SurfaceCompliance { lattice, columns, lump: None };
+            let c = SurfaceCompliance { lattice, columns, correction: None };
             let bytes = c.to_bytes(&a);
             proptest::prop_assert_eq!(SurfaceCompliance::from_bytes(&bytes, &a, 2), Ok(c));
             let mut bad = bytes;

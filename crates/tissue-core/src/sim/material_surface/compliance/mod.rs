@@ -12,7 +12,7 @@
 //! the nodes' columns are solved and kept ([`lattice`]). The contact's normal compliance of two
 //! nodes is the mean of what either's column says (the two differ where a column is shifted or
 //! another face's mesh holds it), so that it is symmetric. The contact solve
-//! ([`SurfaceCompliance::press`]) allocates nothing: it works in a [`ContactScratch`].
+//! ([`SurfaceCompliance::press`]) allocates nothing: it works in a [`SurfaceContactScratch`].
 
 use glam::DVec3;
 
@@ -25,10 +25,10 @@ use crate::mechanics::sparse::SparseError;
 
 pub mod file;
 pub mod lattice;
-pub mod lump;
+pub mod inclusion;
 pub use file::{FILE_FORMAT, FILE_MAGIC, FileError, METHOD_VERSION};
 use lattice::{Lattice, Source};
-use lump::LumpCorrection;
+use inclusion::InclusionCorrection;
 
 /// Divisions of a face per axis: 2 mm spacing.
 pub const DEFAULT_DIVISIONS: usize = 50;
@@ -53,7 +53,7 @@ pub struct SurfaceCompliance {
     /// background's.
     columns: std::sync::Arc<[f32]>,
     /// What the material's inclusions change, near them (none for a homogeneous material).
-    lump: Option<LumpCorrection>,
+    correction: Option<InclusionCorrection>,
 }
 
 /// Errors of the surface compliance.
@@ -81,7 +81,7 @@ pub enum ComplianceError {
     #[error(
         "the inclusions reach {0} nodes of the surface (within 20 mm of them), above the bound of {max}: keep them \
          closer together",
-        max = lump::MAX_NODES
+        max = inclusion::MAX_NODES
     )]
     TooSpread(usize),
     /// The computation was stopped by its caller.
@@ -95,7 +95,7 @@ impl SurfaceCompliance {
     #[cfg(test)]
     pub(crate) fn uniform(divisions: usize, value: f32) -> Self {
         let lattice = Lattice::new(divisions);
-        Self { columns: vec![value; lattice.values].into(), lattice, lump: None }
+        Self { columns: vec![value; lattice.values].into(), lattice, correction: None }
     }
 
     /// Lattice spacing (away from the edges), metres.
@@ -105,28 +105,28 @@ impl SurfaceCompliance {
 
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
-        self.columns.len() * 4 + self.lump.as_ref().map_or(0, LumpCorrection::memory_bytes)
+        self.columns.len() * 4 + self.correction.as_ref().map_or(0, InclusionCorrection::memory_bytes)
     }
 
     /// The compliance of `material`, whose background's this is: with the change its inclusions
-    /// make ([`lump`]; none where it has none); `progress` as [`SurfaceCompliance::compute`]'s.
+    /// make ([`inclusion`]; none where it has none); `progress` as [`SurfaceCompliance::compute`]'s.
     pub fn with_inclusions(
         mut self,
         material: &Material,
         progress: &mut dyn FnMut(f64) -> bool,
     ) -> Result<Self, ComplianceError> {
-        self.lump = if material.inclusions.is_empty() {
+        self.correction = if material.inclusions.is_empty() {
             None
         } else {
-            Some(LumpCorrection::compute(&self.lattice, material, progress)?)
+            Some(InclusionCorrection::compute(&self.lattice, material, progress)?)
         };
         Ok(self)
     }
 
     /// The compliance with `lump` as its inclusions' correction (one computed for this lattice,
-    /// [`LumpCorrection::compute`], or read from its file).
-    pub fn with_lump(mut self, lump: LumpCorrection) -> Self {
-        self.lump = Some(lump);
+    /// [`InclusionCorrection::compute`], or read from its file).
+    pub fn with_correction(mut self, lump: InclusionCorrection) -> Self {
+        self.correction = Some(lump);
         self
     }
 
@@ -136,17 +136,17 @@ impl SurfaceCompliance {
     }
 
     /// The inclusions' correction of `material` on this compliance's lattice.
-    pub fn lump_of(
+    pub fn inclusion_of(
         &self,
         material: &Material,
         progress: &mut dyn FnMut(f64) -> bool,
-    ) -> Result<LumpCorrection, ComplianceError> {
-        LumpCorrection::compute(&self.lattice, material, progress)
+    ) -> Result<InclusionCorrection, ComplianceError> {
+        InclusionCorrection::compute(&self.lattice, material, progress)
     }
 
     /// The inclusions' correction, where the material has inclusions.
-    pub fn lump(&self) -> Option<&LumpCorrection> {
-        self.lump.as_ref()
+    pub fn correction(&self) -> Option<&InclusionCorrection> {
+        self.correction.as_ref()
     }
 
     /// Computes the compliance of `material` with `divisions` divisions per axis (even);
@@ -207,7 +207,7 @@ impl SurfaceCompliance {
                 }
             }
         }
-        Ok(Self { lattice, columns: columns.into(), lump: None })
+        Ok(Self { lattice, columns: columns.into(), correction: None })
     }
 
     /// Rest position of surface node `q`, metres.
@@ -242,7 +242,7 @@ impl SurfaceCompliance {
         &self,
         centre: [f64; 3],
         radius: f64,
-        scratch: &mut ContactScratch,
+        scratch: &mut SurfaceContactScratch,
     ) -> Result<[f64; 3], ComplianceError> {
         self.press_coupled(centre, radius, [0.0; 3], &[[0.0; 3]; 3], scratch)
     }
@@ -259,9 +259,9 @@ impl SurfaceCompliance {
         radius: f64,
         shift: [f64; 3],
         coupling: &[[f64; 3]; 3],
-        scratch: &mut ContactScratch,
+        scratch: &mut SurfaceContactScratch,
     ) -> Result<[f64; 3], ComplianceError> {
-        let ContactScratch { contact: c, nodes, points, sources, previous } = scratch;
+        let SurfaceContactScratch { contact: c, nodes, points, sources, previous } = scratch;
         c.candidates.clear();
         c.active.clear();
         c.lambda.clear();
@@ -381,7 +381,7 @@ impl contact::Compliance for SurfaceNodes<'_> {
                 (None, None) => 0.0,
             }
         };
-        let lump = c.lump.as_ref().map_or(0.0, |l| l.normal(self.nodes[j], n_j, self.nodes[i], n_i));
+        let lump = c.correction.as_ref().map_or(0.0, |l| l.normal(self.nodes[j], n_j, self.nodes[i], n_i));
         w - lump - modes
     }
 }
@@ -426,7 +426,7 @@ pub fn window_count(divisions: usize, centre: [f64; 3], radius: f64) -> usize {
 }
 
 /// Preallocated memory of [`SurfaceCompliance::press`].
-pub struct ContactScratch {
+pub struct SurfaceContactScratch {
     /// The contact's memory: the surface nodes near the sphere as candidates (outward normal from
     /// the centre, depth inside the sphere), those in contact and their normal forces.
     pub contact: contact::ContactScratch,
@@ -440,7 +440,7 @@ pub struct ContactScratch {
     previous: Vec<usize>,
 }
 
-impl ContactScratch {
+impl SurfaceContactScratch {
     /// No contact, and no warm start for the next press.
     pub fn clear(&mut self) {
         let c = &mut self.contact;
@@ -460,13 +460,13 @@ impl ContactScratch {
     }
 }
 
-impl std::fmt::Debug for ContactScratch {
+impl std::fmt::Debug for SurfaceContactScratch {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("ContactScratch").field("active", &self.contact.active.len()).finish()
+        f.debug_struct("SurfaceContactScratch").field("active", &self.contact.active.len()).finish()
     }
 }
 
-impl Default for ContactScratch {
+impl Default for SurfaceContactScratch {
     fn default() -> Self {
         let m = MAX_CONTACT_NODES;
         Self {

@@ -9,24 +9,24 @@
 //!
 //! | bytes | holds |
 //! |---|---|
-//! | 0..8 | [`LUMP_MAGIC`] |
-//! | 8..12 | [`LUMP_FORMAT`] (u32) |
+//! | 0..8 | [`INCLUSION_MAGIC`] |
+//! | 8..12 | [`INCLUSION_FORMAT`] (u32) |
 //! | 12..16 | the crc32 of every byte from 16 to the end (u32) |
-//! | 16..20 | [`LUMP_METHOD_VERSION`] (u32) |
+//! | 16..20 | [`INCLUSION_METHOD_VERSION`] (u32) |
 //! | 20..24 | the face divisions per axis (u32) |
 //! | 24..32 | how many f64 the key holds, `k` (u64) |
 //! | 32.. | the key (`k` f64), the surface nodes' rows (`u64` count, then u32 each), the nodes held (u64), the blocks' values (`u64` count, then f32 each) |
 
-use super::LumpCorrection;
+use super::InclusionCorrection;
 use crate::mechanics::material::Material;
 use crate::sim::material_surface::compliance::file::FileError;
 
 /// The first bytes of a correction file.
-pub const LUMP_MAGIC: [u8; 8] = *b"TSIMLUMP";
+pub const INCLUSION_MAGIC: [u8; 8] = *b"TSIMLUMP";
 /// The version of the file's layout.
-pub const LUMP_FORMAT: u32 = 1;
+pub const INCLUSION_FORMAT: u32 = 1;
 /// The version of the computation (its mesh, reach and method): a change makes old files refused.
-pub const LUMP_METHOD_VERSION: u32 = 1;
+pub const INCLUSION_METHOD_VERSION: u32 = 1;
 
 /// Reads the bytes of a file in order, each read checked to be there.
 struct Cursor<'a> {
@@ -58,16 +58,16 @@ impl Cursor<'_> {
     }
 }
 
-impl LumpCorrection {
+impl InclusionCorrection {
     /// The correction as the bytes of its file, keyed by `material` (with its inclusions) and
     /// the lattice's `divisions`.
     pub fn to_bytes(&self, material: &Material, divisions: usize) -> Vec<u8> {
         let key = material.key();
         let mut out = Vec::with_capacity(64 + 8 * key.len() + 4 * (self.rows.len() + self.values.len()));
-        out.extend_from_slice(&LUMP_MAGIC);
-        out.extend_from_slice(&LUMP_FORMAT.to_le_bytes());
+        out.extend_from_slice(&INCLUSION_MAGIC);
+        out.extend_from_slice(&INCLUSION_FORMAT.to_le_bytes());
         out.extend_from_slice(&[0; 4]);
-        out.extend_from_slice(&LUMP_METHOD_VERSION.to_le_bytes());
+        out.extend_from_slice(&INCLUSION_METHOD_VERSION.to_le_bytes());
         out.extend_from_slice(&(divisions as u32).to_le_bytes());
         out.extend_from_slice(&(key.len() as u64).to_le_bytes());
         key.iter().for_each(|k| out.extend_from_slice(&k.to_le_bytes()));
@@ -81,22 +81,22 @@ impl LumpCorrection {
         out
     }
 
-    /// Reads [`LumpCorrection::to_bytes`]: the correction of `material` on a lattice of
+    /// Reads [`InclusionCorrection::to_bytes`]: the correction of `material` on a lattice of
     /// `divisions` with `nodes` surface nodes, or why `bytes` are not it (checked in this order:
     /// the format, the checksum, the method, the key, the layout).
     pub fn from_bytes(bytes: &[u8], material: &Material, divisions: usize, nodes: usize) -> Result<Self, FileError> {
         if bytes.len() < 16 {
-            let cut = bytes.starts_with(&LUMP_MAGIC) || LUMP_MAGIC.starts_with(bytes);
+            let cut = bytes.starts_with(&INCLUSION_MAGIC) || INCLUSION_MAGIC.starts_with(bytes);
             return Err(if cut { FileError::Truncated } else { FileError::Format });
         }
-        if bytes[..8] != LUMP_MAGIC || u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) != LUMP_FORMAT {
+        if bytes[..8] != INCLUSION_MAGIC || u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) != INCLUSION_FORMAT {
             return Err(FileError::Format);
         }
         if crc32fast::hash(&bytes[16..]) != u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) {
             return Err(FileError::Checksum);
         }
         let mut c = Cursor { bytes, at: 16 };
-        if c.u32()? != LUMP_METHOD_VERSION {
+        if c.u32()? != INCLUSION_METHOD_VERSION {
             return Err(FileError::Method);
         }
         if c.u32()? as usize != divisions {
@@ -139,14 +139,14 @@ mod tests {
     use super::*;
     use crate::mechanics::inclusion::Inclusion;
 
-    fn lumpy() -> Material {
+    fn with_inclusions() -> Material {
         let mut m = Material::object_a();
         m.inclusions.push(Inclusion { centre: [0.05, 0.05, 0.08], radius: 0.008, stiffness: m.stiffness * 5.0 });
         m
     }
 
-    fn small() -> LumpCorrection {
-        LumpCorrection {
+    fn small() -> InclusionCorrection {
+        InclusionCorrection {
             rows: vec![u32::MAX, 0, 1, u32::MAX],
             count: 2,
             values: (0..36).map(|v| v as f32 * 1e-6).collect(),
@@ -155,20 +155,20 @@ mod tests {
 
     #[test]
     fn the_file_round_trips_and_refuses_another_key_or_changed_bytes() {
-        let (m, c) = (lumpy(), small());
+        let (m, c) = (with_inclusions(), small());
         let bytes = c.to_bytes(&m, 10);
-        assert_eq!(LumpCorrection::from_bytes(&bytes, &m, 10, 4), Ok(c.clone()));
-        let mut other = lumpy();
+        assert_eq!(InclusionCorrection::from_bytes(&bytes, &m, 10, 4), Ok(c.clone()));
+        let mut other = with_inclusions();
         other.inclusions[0].radius = 0.009;
-        assert_eq!(LumpCorrection::from_bytes(&bytes, &other, 10, 4), Err(FileError::Material));
-        assert_eq!(LumpCorrection::from_bytes(&bytes, &Material::object_a(), 10, 4), Err(FileError::Material));
-        assert_eq!(LumpCorrection::from_bytes(&bytes, &m, 12, 4), Err(FileError::Grid));
-        assert_eq!(LumpCorrection::from_bytes(&bytes, &m, 10, 5), Err(FileError::Inconsistent));
+        assert_eq!(InclusionCorrection::from_bytes(&bytes, &other, 10, 4), Err(FileError::Material));
+        assert_eq!(InclusionCorrection::from_bytes(&bytes, &Material::object_a(), 10, 4), Err(FileError::Material));
+        assert_eq!(InclusionCorrection::from_bytes(&bytes, &m, 12, 4), Err(FileError::Grid));
+        assert_eq!(InclusionCorrection::from_bytes(&bytes, &m, 10, 5), Err(FileError::Inconsistent));
         let mut changed = bytes.clone();
         *changed.last_mut().expect("bytes") ^= 1;
-        assert_eq!(LumpCorrection::from_bytes(&changed, &m, 10, 4), Err(FileError::Checksum));
-        assert_eq!(LumpCorrection::from_bytes(&bytes[..bytes.len() - 3], &m, 10, 4), Err(FileError::Checksum));
-        assert_eq!(LumpCorrection::from_bytes(&bytes[..10], &m, 10, 4), Err(FileError::Truncated));
-        assert_eq!(LumpCorrection::from_bytes(b"surface-compliance", &m, 10, 4), Err(FileError::Format));
+        assert_eq!(InclusionCorrection::from_bytes(&changed, &m, 10, 4), Err(FileError::Checksum));
+        assert_eq!(InclusionCorrection::from_bytes(&bytes[..bytes.len() - 3], &m, 10, 4), Err(FileError::Checksum));
+        assert_eq!(InclusionCorrection::from_bytes(&bytes[..10], &m, 10, 4), Err(FileError::Truncated));
+        assert_eq!(InclusionCorrection::from_bytes(b"surface-compliance", &m, 10, 4), Err(FileError::Format));
     }
 }

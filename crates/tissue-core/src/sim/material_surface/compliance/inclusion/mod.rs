@@ -37,7 +37,7 @@ const BATCH: usize = 128;
 
 /// The change the inclusions make to the surface compliance, on the surface nodes near them.
 #[derive(Debug, Clone, PartialEq)]
-pub struct LumpCorrection {
+pub struct InclusionCorrection {
     /// For every surface node of the lattice, its row here, `u32::MAX` where the correction does
     /// not hold it.
     rows: Vec<u32>,
@@ -48,7 +48,7 @@ pub struct LumpCorrection {
     values: Vec<f32>,
 }
 
-impl LumpCorrection {
+impl InclusionCorrection {
     /// The correction of `material`'s inclusions on `lattice`'s surface nodes; `progress` as
     /// [`super::SurfaceCompliance::compute`]'s.
     pub fn compute(

@@ -1,6 +1,6 @@
 //! How well a model takes a material's inclusions, against the material: its small-displacement
 //! answer to a smooth pressure on the free face over each inclusion, over its rim and away from it
-//! (the points of [`crate::validate::probe::presses::lump_press_cases`]), against the hex8 FEM
+//! (the points of [`crate::validate::probe::presses::inclusion_press_cases`]), against the hex8 FEM
 //! of the material with its inclusions on the model's grid refined by a whole factor (its nodes
 //! are the model's), as fine as [`REFERENCE_MAX_NODES`] allows; the same at a coarser refinement
 //! says how far the reference still moves. Nothing is fitted to a lump.
@@ -33,7 +33,7 @@ const LOAD_SUB: usize = 16;
 
 /// One case's scores.
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct LumpCaseScore {
+pub struct InclusionCaseScore {
     /// e.g. `pressure_lump1_over`.
     pub id: String,
     /// The pressure's centre on the face, metres.
@@ -52,7 +52,7 @@ pub struct LumpCaseScore {
 
 /// The scores of a model of a material with inclusions.
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct LumpReport {
+pub struct InclusionReport {
     /// What the reference is.
     pub reference: String,
     /// The reference grid's nodes per axis.
@@ -61,7 +61,7 @@ pub struct LumpReport {
     /// relative to its largest displacement.
     pub reference_change: f64,
     /// Per case.
-    pub cases: Vec<LumpCaseScore>,
+    pub cases: Vec<InclusionCaseScore>,
     /// The worst field error.
     pub worst_field_error: f64,
     /// The worst error of the lump's effect over and at the rim of an inclusion (away from it
@@ -156,7 +156,7 @@ pub fn evaluate(
     model: Model,
     params: Option<MsmParams>,
     grid: Grid,
-) -> anyhow::Result<LumpReport> {
+) -> anyhow::Result<InclusionReport> {
     evaluate_until(material, model, params, grid, &|| false)
 }
 
@@ -167,9 +167,9 @@ pub fn evaluate_until(
     params: Option<MsmParams>,
     grid: Grid,
     stop: &dyn Fn() -> bool,
-) -> anyhow::Result<LumpReport> {
+) -> anyhow::Result<InclusionReport> {
     let by = refinement(grid)?;
-    let cases: Vec<(String, [f64; 3])> = crate::validate::probe::presses::lump_press_cases(material)
+    let cases: Vec<(String, [f64; 3])> = crate::validate::probe::presses::inclusion_press_cases(material)
         .into_iter()
         .filter(|c| c.id.ends_with("_r15_d4"))
         .map(|c| (c.id.replace("press_", "pressure_").replace("_r15_d4", ""), c.press.at))
@@ -210,7 +210,7 @@ pub fn evaluate_until(
         let du_ref: Vec<f64> = r.iter().zip(r0).map(|(a, b)| a - b).collect();
         let effect_error =
             norm(u.iter().zip(u0).zip(&du_ref).map(|((a, b), d)| a - b - d)) / norm(du_ref.iter().copied());
-        scores.push(LumpCaseScore {
+        scores.push(InclusionCaseScore {
             id,
             at,
             field_error,
@@ -220,8 +220,8 @@ pub fn evaluate_until(
             effect_error,
         });
     }
-    let worst = |f: &dyn Fn(&LumpCaseScore) -> f64| scores.iter().map(f).fold(0.0, f64::max);
-    Ok(LumpReport {
+    let worst = |f: &dyn Fn(&InclusionCaseScore) -> f64| scores.iter().map(f).fold(0.0, f64::max);
+    Ok(InclusionReport {
         reference: format!(
             "the material with its inclusions: hex8 FEM on the model's grid refined {by} times ({} nodes per axis); a \
              Gaussian pressure of {} mm width and {} N",
@@ -237,7 +237,7 @@ pub fn evaluate_until(
     })
 }
 
-impl LumpReport {
+impl InclusionReport {
     /// The report as a table.
     pub fn to_text(&self) -> String {
         let mut s = format!(
