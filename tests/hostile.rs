@@ -50,19 +50,26 @@ fn script(actions: &str, extra: &str) -> String {
 }
 
 /// Class: an input file of any kind (material, script, parameters, chart) is read through one
-/// bounded path: an endless device or an oversized file is refused at the bound, quickly.
+/// bounded path: an oversized file is refused at the bound, and a device or a FIFO (which would
+/// wait for a writer) as not a regular file, before it is opened; each quickly.
 #[test]
 fn every_input_file_is_bounded() {
     let dir = tempfile::tempdir().expect("tempdir");
     let o = dir.path().join("o.json");
     let big = dir.path().join("big.toml");
     std::fs::write(&big, format!("symmetry = \"orthotropic\"\n# {}\n", "x".repeat(20 << 20))).expect("write");
-    for input in ["/dev/zero", s(&big)] {
-        refused(&["fem", "--material", input, "--out", s(&o)], "bound", 2.0);
-        refused(&["calibrate", "--material", input, "--out", s(&o)], "bound", 2.0);
-        refused(&["simulate", "--script", input, "--out", s(&o)], "bound", 2.0);
-        refused(&["errors", "--params", input], "bound", 2.0);
-        refused(&["choose", "--chart", input], "bound", 2.0);
+    let fifo = dir.path().join("fifo.toml");
+    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+    for (input, needle) in [
+        ("/dev/zero", "is a device, not a regular file"),
+        (s(&fifo), "is a FIFO, not a regular file"),
+        (s(&big), "bound"),
+    ] {
+        refused(&["fem", "--material", input, "--out", s(&o)], needle, 2.0);
+        refused(&["calibrate", "--material", input, "--out", s(&o)], needle, 2.0);
+        refused(&["simulate", "--script", input, "--out", s(&o)], needle, 2.0);
+        refused(&["errors", "--params", input], needle, 2.0);
+        refused(&["choose", "--chart", input], needle, 2.0);
     }
     assert!(!o.exists());
 }
@@ -306,4 +313,102 @@ fn a_probe_never_pulls_and_each_force_says_its_contact() {
     }
     let deepest = samples.iter().filter(|s| s["action"] == 0).map(|s| s["force_n"].as_f64().unwrap_or(0.0));
     assert!(deepest.fold(0.0, f64::max) > 20.0, "the press at 3/4 of the radius pushes back");
+}
+
+/// Class: a reader checks shape as well as values, alike in TOML and JSON. An inclusion's
+/// `centre` with four numbers, or two, and a key of the wrong type are refused with one line
+/// naming the file, the inclusion and the key; trailing data after a JSON document is refused.
+#[test]
+fn a_material_file_of_the_wrong_shape_is_named_the_same_in_toml_and_json() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = dir.path().join("o.json");
+    let background = "\"symmetry\": \"orthotropic\", \"units\": \"kPa\", \"E1\": 10.0, \"E2\": 12.0, \"E3\": 15.0, \
+                      \"nu12\": 0.3, \"nu13\": 0.3, \"nu23\": 0.3, \"G12\": 4.0, \"G13\": 4.0, \"G23\": 4.0";
+    let toml_background = "symmetry = \"orthotropic\"\nunits = \"kPa\"\nE1 = 10.0\nE2 = 12.0\nE3 = 15.0\nnu12 = 0.3\n\
+                           nu13 = 0.3\nnu23 = 0.3\nG12 = 4.0\nG13 = 4.0\nG23 = 4.0";
+    for (centre, needle) in [("[0.05, 0.05, 0.08, 0.3]", "got 4"), ("[0.05, 0.05]", "got 2")] {
+        let toml = write(
+            dir.path(),
+            "m.toml",
+            &format!("{toml_background}\n\n[[inclusion]]\ncentre = {centre}\nradius = 0.008\nscale = 5.0\n"),
+        );
+        let json = write(
+            dir.path(),
+            "m.json",
+            &format!("{{{background}, \"inclusion\": [{{\"centre\": {centre}, \"radius\": 0.008, \"scale\": 5.0}}]}}"),
+        );
+        for file in [&toml, &json] {
+            let msg = refused(&["fem", "--material", s(file), "--bc", "patch", "--out", s(&o)], needle, 2.0);
+            assert!(msg.contains(s(file)) && msg.contains("inclusion 1, centre: expected 3 numbers"), "{msg}");
+        }
+    }
+    let json = write(
+        dir.path(),
+        "m.json",
+        &format!("{{{background}, \"inclusion\": [{{\"centre\": [0.05, 0.05, 0.08], \"radius\": \"big\"}}]}}"),
+    );
+    refused(&["fem", "--material", s(&json), "--bc", "patch", "--out", s(&o)], "inclusion 1, radius: ", 2.0);
+    let json = write(dir.path(), "m.json", &format!("{{{background}}} {{}}"));
+    refused(&["fem", "--material", s(&json), "--bc", "patch", "--out", s(&o)], "trailing", 2.0);
+    assert!(!o.exists());
+}
+
+/// Class: an output that cannot be written is refused before the work: a recording whose folder
+/// takes no file before the viewer's window opens, a palpation map into such a folder or over a
+/// write-protected map, each in one line within a second (`/proc` takes no new file even for
+/// root).
+#[test]
+fn an_output_that_cannot_be_written_is_refused_before_the_work() {
+    refused(&["view", "--record", "/proc/tissue-sim-recording.json", "--frames", "1"], "does not take a new file", 2.0);
+    refused(&["palpate", "--object", "A", "--out", "/proc/tissue-sim-map"], "not writable", 2.0);
+    let dir = tempfile::tempdir().expect("tempdir");
+    let map = dir.path().join("map");
+    std::fs::create_dir(&map).expect("a map folder");
+    let png = write(&map, "map.png", "an old map");
+    let mut locked = std::fs::metadata(&png).expect("meta").permissions();
+    locked.set_readonly(true);
+    std::fs::set_permissions(&png, locked).expect("chmod");
+    refused(&["palpate", "--object", "A", "--out", s(&map)], "write-protected", 2.0);
+    assert_eq!(std::fs::read_to_string(&png).expect("the old map"), "an old map");
+    assert_eq!(std::fs::read_dir(&map).expect("listed").count(), 1, "nothing written beside the old map");
+}
+
+/// Class: a recording is itself and its replay says where it is not. A recorded sample whose
+/// `force_n` is not its force along the push (tripled) is refused on reading with the sample
+/// named; a sample whose contact was changed replays with that sample named as differing.
+#[test]
+fn a_recording_that_contradicts_itself_is_refused_and_a_changed_one_is_named() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = dir.path().join("o.json");
+    let path = r#"{"probe_path":{"radius":0.015,"direction":[0,0,-1],"sample_hz":100,"keys":[
+        {"t":0,"at":[0.05,0.05,0.1],"depth":0},{"t":0.05,"at":[0.05,0.05,0.1],"depth":0.002}]}}"#;
+    let plain = write(dir.path(), "plain.json", &script(path, r#","model":"axis","contact":"nodes""#));
+    let out = dir.path().join("plain_out.json");
+    let r = run(&["simulate", "--script", s(&plain), "--out", s(&out)]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let result: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).expect("read")).expect("json");
+    let samples = result["force_path"].clone();
+    assert!(samples.as_array().is_some_and(|a| a.len() > 3), "{samples}");
+    let recording = |samples: &serde_json::Value| {
+        let text = script(path, &format!(r#","model":"axis","contact":"nodes","recorded":{{"force_path":{samples}}}"#));
+        write(dir.path(), "recording.json", &text)
+    };
+    // Replayed as recorded: nothing differs.
+    let same = recording(&samples);
+    let r = run(&["simulate", "--script", s(&same), "--out", s(&o)]);
+    assert!(stderr(&r).contains("differ") && stderr(&r).contains(" 0 differ"), "{}", stderr(&r));
+    // force_n tripled: refused on reading.
+    let mut tripled = samples.clone();
+    let f = tripled[2]["force_n"].as_f64().expect("a force");
+    tripled[2]["force_n"] = serde_json::json!(3.0 * f + 1.0);
+    let bad = recording(&tripled);
+    refused(&["simulate", "--script", s(&bad), "--out", s(&o)], "recorded sample 2: force_n", 2.0);
+    // The contact changed: the replay names the sample.
+    let mut changed = samples.clone();
+    changed[3]["contact"] = serde_json::json!("surface");
+    let other = recording(&changed);
+    let r = run(&["simulate", "--script", s(&other), "--out", s(&o)]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert!(stderr(&r).contains(" 1 differ") && stderr(&r).contains("sample 3 "), "{}", stderr(&r));
+    assert!(stderr(&r).contains("contact surface recorded, nodes replayed"), "{}", stderr(&r));
 }

@@ -48,7 +48,7 @@ pub fn run(args: PalpateArgs) -> anyhow::Result<()> {
     if let Err(why) = palpation.check() {
         bail!("{why}");
     }
-    OutputDir::check(&args.out)?;
+    OutputDir::check_names(&args.out, &["map.json", "map.csv", "map.png"])?;
     let started = Instant::now();
     let dir = args.cache.clone().or_else(crate::io::cache_dir);
     let mut report = stderr_report();

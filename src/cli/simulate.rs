@@ -28,5 +28,18 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     let outcome =
         crate::study::script::run_from(&s, folder).with_context(|| format!("in {}", args.script.display()))?;
     outcome.check_finite()?;
-    crate::io::write_json_compact(&args.out, &outcome)
+    crate::io::write_json_compact(&args.out, &outcome)?;
+    if let Some(r) = &outcome.replay {
+        // A replay says whether it is the recording, and where it is not.
+        let first = r.mismatches.first().map_or(String::new(), |m| format!("; first: {m}"));
+        eprintln!(
+            "replay: {} of {} recorded samples matched, {} differ (force relative L2 {}, force_n {}){first}",
+            r.matched,
+            r.recorded,
+            r.mismatched,
+            crate::io::num(r.relative_l2),
+            crate::io::num(r.force_n_relative_l2)
+        );
+    }
+    Ok(())
 }

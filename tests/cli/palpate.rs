@@ -49,7 +49,9 @@ fn palpate_refuses_bad_input_in_one_line() {
     let out = dir.path().join("never");
     let o = out.to_str().expect("utf8");
     let missing = dir.path().join("missing.toml");
-    let cases: [(Vec<&str>, &str); 5] = [
+    let cases: [(Vec<&str>, &str); 7] = [
+        (vec!["--object", "A", "--depth", "1e-6"], "touches none of the material's surface nodes"),
+        (vec!["--object", "A", "--depth", "1e-12"], "every press of the grid touches from"),
         (vec!["--object", "A", "--face", "-z"], "-z"),
         (vec!["--object", "A", "--grid", "0"], "grid of 0"),
         (vec!["--object", "A", "--depth", "0.02"], "deeper than"),

@@ -66,11 +66,11 @@ pub fn place(path: &Path) -> Place {
         own
     };
     let ft = meta.file_type();
-    if ft.is_file() { Place::File } else { Place::Other(format!("is {}, not a regular file", kind(&ft))) }
+    if ft.is_file() { Place::File } else { Place::Other(format!("is {}, not a regular file", kind_name(&ft))) }
 }
 
 /// What a file that is not a regular file is, in words.
-fn kind(ft: &std::fs::FileType) -> &'static str {
+pub(crate) fn kind_name(ft: &std::fs::FileType) -> &'static str {
     if ft.is_dir() {
         return "a directory";
     }

@@ -1,21 +1,17 @@
 //! Numbers and messages as the user reads them: short numbers, one brief line.
 
 /// A number as a message shows it, short: exactly as typed when it has at most six significant
-/// digits (plain when moderate, `1e-300` in exponent form rather than three hundred zeros),
-/// otherwise rounded to four significant digits in exponent form (`4.156e-4`).
+/// digits, otherwise rounded to four (`4.9` for 4.9000000001, `11.3` for 11.29999); plain when
+/// moderate (1e-4 to 1e7), else in exponent form (`1e-300` rather than three hundred zeros,
+/// `4.156e-4`).
 pub fn num(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");
     }
     let shortest = format!("{v:e}");
     let digits = shortest.split('e').next().unwrap_or("").chars().filter(char::is_ascii_digit).count();
-    if digits > 6 {
-        format!("{v:.3e}")
-    } else if (1e-4..1e7).contains(&v.abs()) {
-        format!("{v}")
-    } else {
-        shortest
-    }
+    let shown = if digits > 6 { format!("{v:.3e}").parse().unwrap_or(v) } else { v };
+    if (1e-4..1e7).contains(&shown.abs()) { format!("{shown}") } else { format!("{shown:e}") }
 }
 
 /// Longest quoted text a message repeats, characters.
@@ -97,8 +93,12 @@ mod tests {
         assert_eq!(num(2.5), "2.5");
         assert_eq!(num(1e308), "1e308");
         assert_eq!(num(1e-300), "1e-300");
-        assert_eq!(num(0.0004155926674608283), "4.156e-4");
-        assert_eq!(num(-123456.789), "-1.235e5");
+        assert_eq!(num(0.0004155926674608283), "0.0004156");
+        assert_eq!(num(0.00004155926674608283), "4.156e-5");
+        assert_eq!(num(-123456.789), "-123500");
+        assert_eq!(num(4.9000000001), "4.9");
+        assert_eq!(num(11.299999999), "11.3");
+        assert_eq!(num(1.23456789e-7), "1.235e-7");
         assert_eq!(num(f64::NAN), "NaN");
         for v in [1e308, -1e-300, 1.0 / 3.0, 6.02e23, 5e-324] {
             assert!(num(v).len() <= 10, "{v}: {}", num(v));

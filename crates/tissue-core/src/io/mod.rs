@@ -7,6 +7,7 @@ pub mod cache;
 pub mod message;
 pub mod pending;
 pub mod read;
+pub mod shape;
 pub mod write;
 
 pub use message::{brief_line, num};

@@ -8,7 +8,8 @@ use serde::Deserialize;
 /// Reads a JSON file (at most [`MAX_INPUT_BYTES`]).
 pub fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> anyhow::Result<T> {
     let text = read_text(path)?;
-    serde_json::from_str(&text).with_context(|| format!("invalid JSON in {}", path.display()))
+    // The key an error is at, trailing data refused ([`crate::io::shape`]).
+    crate::io::shape::from_json(&text).map_err(|e| anyhow::anyhow!("invalid JSON in {}: {e}", path.display()))
 }
 
 /// Largest input file read, bytes.
@@ -40,10 +41,12 @@ fn cannot_read(path: &Path) -> String {
 /// bytes so that a longer one is seen.
 fn open_bounded(path: &Path, max: u64) -> anyhow::Result<std::io::Take<std::fs::File>> {
     use std::io::Read as _;
-    let f = std::fs::File::open(path).with_context(|| cannot_read(path))?;
-    if f.metadata().is_ok_and(|m| m.is_dir()) {
-        anyhow::bail!("cannot read {}: it is a directory", path.display());
+    // Looked at before it is opened: opening a FIFO would wait for a writer.
+    let kind = std::fs::metadata(path).with_context(|| cannot_read(path))?.file_type();
+    if !kind.is_file() {
+        anyhow::bail!("cannot read {}: it is {}, not a regular file", path.display(), crate::io::cache::kind_name(&kind));
     }
+    let f = std::fs::File::open(path).with_context(|| cannot_read(path))?;
     Ok(f.take(max + 1))
 }
 
@@ -60,8 +63,8 @@ mod tests {
     use super::*;
 
     #[test]
-    fn endless_inputs_are_refused_at_the_bound() {
+    fn endless_inputs_are_refused_before_they_are_opened() {
         let e = read_text(Path::new("/dev/zero")).unwrap_err();
-        assert!(format!("{e:#}").contains("input bound"), "{e:#}");
+        assert!(format!("{e:#}").contains("is a device, not a regular file"), "{e:#}");
     }
 }

@@ -89,11 +89,20 @@ fn resolve(path: &Path) -> anyhow::Result<Target> {
 }
 
 /// Checks, before any work, that `path` can be written as [`write_atomic`] will: standard output,
-/// a special file, or a regular file (new or replaceable) in an existing directory.
+/// a special file, or a regular file (new or replaceable) in an existing directory. A new file's
+/// folder must take a file: a trial file is created and removed (a read-only folder, or one
+/// under `/proc`, is found here, not after the work).
 pub fn check_output(path: &Path) -> anyhow::Result<()> {
+    use anyhow::Context as _;
     match resolve(path)? {
         Target::Stdout | Target::Special(_) => Ok(()),
-        Target::Regular(target) => check_regular(path, &target).map(|_| ()),
+        Target::Regular(target) => {
+            let (_, dir) = check_regular(path, &target)?;
+            tempfile::Builder::new().prefix(".tissue-sim-").tempfile_in(dir).with_context(|| {
+                format!("cannot write {}: the folder {} does not take a new file", path.display(), dir.display())
+            })?;
+            Ok(())
+        }
     }
 }
 
@@ -191,7 +200,35 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         }
         Target::Regular(p) => p,
     };
-    let (existing, dir) = check_regular(path, &target)?;
+    stage(path, &target, bytes)?.persist()
+}
+
+/// A regular file's new content, written and flushed to a temporary file beside its target and
+/// not yet in its place ([`Staged::persist`]).
+struct Staged {
+    path: PathBuf,
+    target: PathBuf,
+    existed: bool,
+    tmp: tempfile::NamedTempFile,
+    _pending: Pending,
+}
+
+impl Staged {
+    /// Renames the staged file over its target.
+    fn persist(self) -> anyhow::Result<()> {
+        use anyhow::Context as _;
+        let Self { path, target, tmp, _pending, .. } = self;
+        tmp.persist(&target).map_err(|e| e.error).with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(())
+    }
+}
+
+/// Writes `bytes` for the regular file `target` (written as `path`) into a temporary file in its
+/// directory, flushed: a full disk or a refused file fails here, with the target untouched.
+fn stage(path: &Path, target: &Path, bytes: &[u8]) -> anyhow::Result<Staged> {
+    use anyhow::Context as _;
+    use std::io::Write as _;
+    let (existing, dir) = check_regular(path, target)?;
     let mut builder = tempfile::Builder::new();
     builder.prefix(".tissue-sim-").suffix(".tmp");
     #[cfg(unix)]
@@ -204,7 +241,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let mut tmp = builder
         .tempfile_in(dir)
         .with_context(|| format!("cannot write {}: cannot create a file in {}", path.display(), dir.display()))?;
-    let _pending = Pending::track(tmp.path());
+    let pending = Pending::track(tmp.path());
     #[cfg(unix)]
     if let Some(m) = &existing {
         use std::os::unix::fs::{MetadataExt as _, PermissionsExt as _};
@@ -215,8 +252,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     }
     tmp.write_all(bytes).with_context(|| format!("cannot write {}", path.display()))?;
     tmp.as_file().sync_all().with_context(|| format!("cannot write {}", path.display()))?;
-    tmp.persist(&target).map_err(|e| e.error).with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
+    Ok(Staged { path: path.to_path_buf(), target: target.to_path_buf(), existed: existing.is_some(), tmp, _pending: pending })
 }
 
 /// A set of files for one output directory, written only once all of them exist: into a fresh
@@ -249,20 +285,48 @@ impl OutputDir {
         }
     }
 
+    /// Checks, before any work, that the set `names` can be written into `dir` as
+    /// [`OutputDir::commit`] will: [`OutputDir::check`], the folder that will hold them writable
+    /// (a trial file created and removed), and each name that exists replaceable (a regular
+    /// file, not write-protected, or a special file written in place).
+    pub fn check_names(dir: &Path, names: &[&str]) -> anyhow::Result<()> {
+        use anyhow::Context as _;
+        Self::check(dir)?;
+        let holder = if dir.is_dir() {
+            dir
+        } else {
+            match dir.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p,
+                _ => Path::new("."),
+            }
+        };
+        tempfile::Builder::new()
+            .prefix(".tissue-sim-")
+            .tempfile_in(holder)
+            .with_context(|| format!("cannot write to {}: the folder is not writable", holder.display()))?;
+        if dir.is_dir() {
+            for name in names {
+                check_output(&dir.join(name))?;
+            }
+        }
+        Ok(())
+    }
+
     /// Adds a file (a plain name, no directories).
     pub fn add(&mut self, name: impl Into<String>, bytes: impl Into<Vec<u8>>) {
         self.files.push((name.into(), bytes.into()));
     }
 
-    /// Writes every file into `dir`.
+    /// Writes every file into `dir`, as a set: a new directory is filled beside it and renamed
+    /// into place; into an existing one every file is first written beside its target (a full
+    /// disk or a refused name fails there, nothing replaced), then each renamed over it, the old
+    /// files kept as hard links until all are in place and put back if a rename fails. Special
+    /// files in the folder (a FIFO) are written in place, last.
     pub fn commit(&self, dir: &Path) -> anyhow::Result<()> {
         use anyhow::Context as _;
         Self::check(dir)?;
         if dir.is_dir() {
-            for (name, bytes) in &self.files {
-                write_atomic(&dir.join(name), bytes)?;
-            }
-            return Ok(());
+            return self.commit_into(dir);
         }
         let parent = match dir.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
@@ -285,6 +349,66 @@ impl OutputDir {
         if let Err(e) = std::fs::rename(&kept, dir) {
             let _ = std::fs::remove_dir_all(&kept);
             return Err(e).with_context(|| format!("cannot create {}", dir.display()));
+        }
+        Ok(())
+    }
+
+    /// [`OutputDir::commit`] into the existing directory `dir`.
+    fn commit_into(&self, dir: &Path) -> anyhow::Result<()> {
+        use anyhow::{Context as _, bail};
+        for (name, bytes) in &self.files {
+            if bytes.len() > MAX_OUTPUT_BYTES {
+                bail!("refusing to write {}: the output would be {} MB", dir.join(name).display(), bytes.len() >> 20);
+            }
+        }
+        // Every regular file staged first; any failure here leaves the folder as it was.
+        let mut staged = Vec::new();
+        let mut special = Vec::new();
+        for (name, bytes) in &self.files {
+            let path = dir.join(name);
+            match resolve(&path)? {
+                Target::Regular(target) => staged.push(stage(&path, &target, bytes)?),
+                Target::Special(_) | Target::Stdout => special.push((path, bytes)),
+            }
+        }
+        // The old files kept under other names until the new ones are all in place.
+        let mut backups: Vec<Option<PathBuf>> = Vec::with_capacity(staged.len());
+        for s in &staged {
+            let backup = if s.existed {
+                let b = s.tmp.path().with_extension("old");
+                std::fs::hard_link(&s.target, &b)
+                    .with_context(|| format!("cannot write {}: cannot keep the old file", s.path.display()))?;
+                Some(b)
+            } else {
+                None
+            };
+            backups.push(backup);
+        }
+        let guards: Vec<Pending> = backups.iter().flatten().map(|b| Pending::track(b)).collect();
+        let mut placed: Vec<(PathBuf, Option<PathBuf>)> = Vec::new();
+        for (s, backup) in staged.into_iter().zip(&backups) {
+            let target = s.target.clone();
+            if let Err(e) = s.persist() {
+                // Put back what was replaced, remove what was new.
+                for (t, b) in placed.iter().rev() {
+                    match b {
+                        Some(b) => drop(std::fs::rename(b, t)),
+                        None => drop(std::fs::remove_file(t)),
+                    }
+                }
+                for b in backups.iter().flatten() {
+                    let _ = std::fs::remove_file(b);
+                }
+                return Err(e);
+            }
+            placed.push((target, backup.clone()));
+        }
+        for b in backups.iter().flatten() {
+            let _ = std::fs::remove_file(b);
+        }
+        drop(guards);
+        for (path, bytes) in special {
+            write_atomic(&path, bytes)?;
         }
         Ok(())
     }
@@ -373,5 +497,34 @@ mod tests {
         let names: Vec<_> = std::fs::read_dir(dir.path()).expect("ls").map(|e| e.expect("entry").file_name()).collect();
         assert_eq!(names.len(), 1, "a temporary directory was left behind: {names:?}");
         assert!(OutputDir::check(&dir.path().join("missing/report")).is_err());
+    }
+
+    #[test]
+    fn a_set_into_an_existing_folder_is_written_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        std::fs::write(dir.path().join("a.txt"), "old a").expect("write");
+        std::fs::write(dir.path().join("b.txt"), "old b").expect("write");
+        let mut set = OutputDir::default();
+        set.add("a.txt", "new a");
+        set.add("b.txt", "new b");
+        set.add("c.txt", "new c");
+        std::fs::set_permissions(dir.path().join("b.txt"), std::fs::Permissions::from_mode(0o444)).expect("chmod");
+        let e = set.commit(dir.path()).expect_err("b is write-protected");
+        assert!(format!("{e:#}").contains("write-protected"), "{e:#}");
+        let listed = |d: &Path| {
+            let mut names: Vec<String> =
+                std::fs::read_dir(d).expect("listed").map(|e| e.expect("entry").file_name().into_string().expect("utf8")).collect();
+            names.sort();
+            names
+        };
+        assert_eq!(listed(dir.path()), ["a.txt", "b.txt"], "nothing new and nothing left behind");
+        assert_eq!(std::fs::read_to_string(dir.path().join("a.txt")).expect("read"), "old a");
+        std::fs::set_permissions(dir.path().join("b.txt"), std::fs::Permissions::from_mode(0o644)).expect("chmod");
+        set.commit(dir.path()).expect("the whole set");
+        assert_eq!(listed(dir.path()), ["a.txt", "b.txt", "c.txt"]);
+        for n in ["a", "b", "c"] {
+            assert_eq!(std::fs::read_to_string(dir.path().join(format!("{n}.txt"))).expect("read"), format!("new {n}"));
+        }
+        assert!(OutputDir::check_names(dir.path(), &["a.txt", "b.txt"]).is_ok());
     }
 }

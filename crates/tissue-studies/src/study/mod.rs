@@ -208,7 +208,8 @@ pub fn write_chart(
     with_stability: bool,
     progress: &mut dyn FnMut(&str),
 ) -> anyhow::Result<Vec<ChartPoint>> {
-    OutputDir::check(dir)?;
+    let names = ["chart.csv", "chart.svg", "chart_dynamic.svg", "chart.md", "stability.csv", "stability.svg"];
+    OutputDir::check_names(dir, &names[..if with_stability { 6 } else { 4 }])?;
     let mut files = OutputDir::default();
     let start = std::time::Instant::now();
     let (points, notes) = chart::compute(opts, progress)?;

@@ -16,32 +16,14 @@ impl Material {
         // The one bounded reading path of every input file.
         let text = crate::io::read_text(path).map_err(|e| MaterialError::Read(format!("{e:#}")))?;
         let is_json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
-        let file: MaterialFile = if is_json {
-            serde_json::from_str(&text)
-                .map_err(|e| MaterialError::Parse { path: shown.clone(), message: e.to_string() })?
-        } else {
-            toml::from_str(&text)
-                .map_err(|e| MaterialError::Parse { path: shown.clone(), message: toml_message(&text, &e) })?
-        };
+        // The shape checked alike in both: the key an error is at, lists of the wrong length.
+        let file: MaterialFile = if is_json { crate::io::shape::from_json(&text) } else { crate::io::shape::from_toml(&text) }
+            .map_err(|message| MaterialError::Parse { path: shown.clone(), message })?;
         let default_name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("custom");
         file.into_material(default_name).map_err(|e| match e {
             MaterialError::Parse { message, .. } => MaterialError::Parse { path: shown, message },
             other => other,
         })
-    }
-}
-
-/// A TOML error on one line: `line L, column C: message`.
-fn toml_message(text: &str, e: &toml::de::Error) -> String {
-    let message = e.message().trim().replace('\n', "; ");
-    match e.span() {
-        Some(span) => {
-            let before = &text[..span.start.min(text.len())];
-            let line = before.matches('\n').count() + 1;
-            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-            format!("line {line}, column {column}: {message}")
-        }
-        None => message,
     }
 }
 
@@ -141,5 +123,69 @@ impl MaterialFile {
         let inclusions =
             inclusion_file::read(&self.inclusion, &background.stiffness, self.units.as_deref()).map_err(parse)?;
         Ok(Material { inclusions, ..background })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    /// A file of `text` named `name` in a fresh folder, read as a material.
+    fn read(name: &str, text: &[u8]) -> Result<Material, MaterialError> {
+        let dir = tempfile::tempdir().expect("a folder");
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).expect("written");
+        Material::from_file(&path)
+    }
+
+    /// A valid background and one inclusion with these keys, as TOML.
+    fn with_inclusion(centre: &[f64], radius: f64, scale: f64) -> String {
+        let list = centre.iter().map(|c| format!("{c:?}")).collect::<Vec<_>>().join(", ");
+        format!(
+            "symmetry = \"orthotropic\"\nunits = \"kPa\"\nE1 = 10.0\nE2 = 12.0\nE3 = 15.0\nnu12 = 0.3\nnu13 = 0.3\n\
+             nu23 = 0.3\nG12 = 4.0\nG13 = 4.0\nG23 = 4.0\n\n[[inclusion]]\ncentre = [{list}]\nradius = {radius:?}\n\
+             scale = {scale:?}\n"
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Any bytes, as TOML or JSON, give a material or a one-line error, never a panic.
+        #[test]
+        fn any_bytes_are_a_material_or_one_line(bytes in proptest::collection::vec(any::<u8>(), 0..300)) {
+            for name in ["m.toml", "m.json"] {
+                if let Err(e) = read(name, &bytes) {
+                    prop_assert!(!e.to_string().contains('\n'), "{}", e);
+                }
+            }
+        }
+
+        /// An inclusion near the bounds (any number of coordinates, sizes across the cube, any
+        /// scale) is read as written, with finite numbers, or refused in one line naming it: a
+        /// list of other than three coordinates is never cut or padded.
+        #[test]
+        fn an_inclusion_is_read_as_written_or_refused(
+            centre in proptest::collection::vec(-0.02f64..0.12, 0..6),
+            radius in -0.01f64..0.08,
+            scale in prop_oneof![-2.0f64..30.0, Just(f64::MIN_POSITIVE), Just(1e12)],
+        ) {
+            match read("m.toml", with_inclusion(&centre, radius, scale).as_bytes()) {
+                Ok(m) => {
+                    prop_assert_eq!(centre.len(), 3);
+                    prop_assert_eq!(m.inclusions.len(), 1);
+                    let i = &m.inclusions[0];
+                    prop_assert_eq!(i.centre.to_vec(), centre);
+                    prop_assert_eq!(i.radius, radius);
+                    prop_assert!(i.stiffness.iter().all(|v| v.is_finite()));
+                }
+                Err(e) => {
+                    let e = e.to_string();
+                    prop_assert!(!e.contains('\n') && e.contains("inclusion 1"), "{}", e);
+                }
+            }
+        }
     }
 }

@@ -16,6 +16,7 @@ use crate::mechanics::inclusion::Inclusion;
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs, non_snake_case)]
 pub struct InclusionFile {
+    #[serde(deserialize_with = "crate::io::shape::numbers")]
     pub centre: [f64; 3],
     pub radius: f64,
     pub scale: Option<f64>,

@@ -111,7 +111,35 @@ impl Palpation {
         for at in self.points() {
             press::check(at, inward, self.radius, self.depth, true, &|p| p[2] <= 0.0)?;
         }
+        let (at, least) = self.shallowest_touching();
+        if self.depth < least {
+            return Err(format!(
+                "depth {} mm: the press at {} mm touches none of the material's surface nodes; every press of the \
+                 grid touches from {} mm deep",
+                crate::io::num(self.depth * 1e3),
+                at.map(|c| crate::io::num(c * 1e3)).join(", "),
+                crate::io::num((least * 1e3 * 1e3).ceil() / 1e3)
+            ));
+        }
         Ok(())
+    }
+
+    /// The depth from which every press of the grid touches a node of the material's surface
+    /// lattice (the contact's nodes; a shallower sphere between them reads 0 N), metres, and the
+    /// point that needs it: a node `r` across from the point is touched `R - sqrt(R^2 - r^2)` deep.
+    fn shallowest_touching(&self) -> ([f64; 3], f64) {
+        let nodes = crate::sim::material_surface::compliance::lattice::coordinates(
+            crate::sim::material_surface::compliance::DEFAULT_DIVISIONS,
+        );
+        let nearest = |x: f64| nodes.iter().map(|c| (c - x).abs()).fold(f64::INFINITY, f64::min);
+        let r = self.radius;
+        self.points()
+            .into_iter()
+            .map(|at| {
+                let across: f64 = (0..3).filter(|&a| a != self.face.axis).map(|a| nearest(at[a]).powi(2)).sum();
+                (at, r - (r * r - across.min(r * r)).sqrt())
+            })
+            .fold(([0.0; 3], 0.0), |a, b| if b.1 > a.1 { b } else { a })
     }
 
     /// The points pressed, row by row (`v` outer, `u` inner), metres.

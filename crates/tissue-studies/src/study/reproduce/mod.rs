@@ -349,7 +349,7 @@ fn mean_sd(v: &[f64]) -> (f64, f64) {
 
 /// Runs everything and writes `dir/report.md`, the figures and the data.
 pub fn run(dir: &Path, opts: &Options) -> anyhow::Result<()> {
-    OutputDir::check(dir)?;
+    OutputDir::check_names(dir, &["report.md", "results.json"])?;
     let mut files = OutputDir::default();
     let start = Instant::now();
     let grid = Grid::paper();

@@ -83,6 +83,39 @@ pub(super) fn check_script(script: &Script, object: &str) -> anyhow::Result<()> 
     if total_samples > MAX_SAMPLES {
         anyhow::bail!("script: {total_samples} probe samples in all, above the bound of {MAX_SAMPLES}");
     }
+    if let Some(r) = &script.recorded {
+        check_recorded(&r.force_path, &script.actions)?;
+    }
+    Ok(())
+}
+
+/// The recorded samples of a recording agree with themselves and with their actions: each names
+/// a probe path, its numbers are finite, and its `force_n` is its force along the push (to
+/// 1e-6 of the force); the error names the sample (0-based, as in `force_path`).
+fn check_recorded(samples: &[super::PathSample], actions: &[Action]) -> anyhow::Result<()> {
+    if samples.len() > MAX_SAMPLES {
+        anyhow::bail!("script: {} recorded samples, above the bound of {MAX_SAMPLES}", samples.len());
+    }
+    for (k, s) in samples.iter().enumerate() {
+        let say = |why: String| anyhow::anyhow!("script: recorded sample {k}: {why}");
+        let Some(Action::ProbePath { direction, .. }) = actions.get(s.action) else {
+            return Err(say(format!("action {} is not a probe path of the script", s.action)));
+        };
+        let numbers = [s.t, s.depth_m, s.force_n].into_iter().chain(s.at).chain(s.force);
+        if !numbers.into_iter().all(f64::is_finite) {
+            return Err(say("its time, point, depth and forces must be finite numbers".into()));
+        }
+        let d = glam::DVec3::from(*direction);
+        let along = -glam::DVec3::from(s.force).dot(d / d.length());
+        let scale = glam::DVec3::from(s.force).length();
+        if (along - s.force_n).abs() > 1e-6 * scale + 1e-12 {
+            return Err(say(format!(
+                "force_n {} N is not its force along the push ({} N)",
+                crate::io::num(s.force_n),
+                crate::io::num(along)
+            )));
+        }
+    }
     Ok(())
 }
 
@@ -197,4 +230,56 @@ pub(super) fn check_steps(script: &Script, dt: f64) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+
+    use super::super::Script;
+
+    /// A probe action's keys near the bounds, as a script's JSON.
+    fn probe_script(at: &[f64], radius: f64, depth: f64) -> String {
+        let at = at.iter().map(|c| format!("{c:?}")).collect::<Vec<_>>().join(",");
+        format!(
+            r#"{{"object":"A","model":"axis","contact":"nodes","actions":[{{"probe":{{"at":[{at}],"direction":[0,0,-1],
+               "radius":{radius:?},"depth":{depth:?},"duration_s":0.01}}}}]}}"#
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        /// Any bytes read as a script give a checked script or a one-line error, never a panic.
+        #[test]
+        fn any_bytes_are_a_script_or_one_line(bytes in proptest::collection::vec(any::<u8>(), 0..300)) {
+            let text = String::from_utf8_lossy(&bytes);
+            let read = crate::io::shape::from_json::<Script>(&text).map_err(anyhow::Error::msg);
+            if let Err(e) = read.and_then(|s| super::check_script(&s, "A")) {
+                prop_assert!(!format!("{e:#}").contains('\n'), "{:#}", e);
+            }
+        }
+
+        /// A probe near the bounds (any number of coordinates, sizes around the limits) is
+        /// accepted as written or refused in one line; a point of other than three numbers never.
+        #[test]
+        fn a_probe_is_read_as_written_or_refused(
+            at in proptest::collection::vec(-0.01f64..0.11, 0..5),
+            radius in 0.0f64..0.06,
+            depth in -0.001f64..0.05,
+        ) {
+            let read = crate::io::shape::from_json::<Script>(&probe_script(&at, radius, depth));
+            match read.map_err(anyhow::Error::msg).and_then(|s| super::check_script(&s, "A").map(|()| s)) {
+                Ok(s) => {
+                    prop_assert_eq!(at.len(), 3);
+                    let super::Action::Probe { at: got, radius: r, depth: d, .. } = &s.actions[0] else {
+                        return Err(TestCaseError::fail("not a probe"));
+                    };
+                    prop_assert_eq!(got.to_vec(), at);
+                    prop_assert_eq!((*r, *d), (radius, depth));
+                }
+                Err(e) => prop_assert!(!format!("{e:#}").contains('\n'), "{:#}", e),
+            }
+        }
+    }
 }

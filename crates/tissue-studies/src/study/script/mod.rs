@@ -151,6 +151,7 @@ pub enum Action {
     /// Pull a node towards a point.
     Drag {
         node: usize,
+        #[serde(deserialize_with = "crate::io::shape::numbers")]
         to: [f64; 3],
         duration_s: f64,
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
@@ -158,7 +159,9 @@ pub enum Action {
     },
     /// Push the spherical probe into the tissue.
     Probe {
+        #[serde(deserialize_with = "crate::io::shape::numbers")]
         at: [f64; 3],
+        #[serde(deserialize_with = "crate::io::shape::numbers")]
         direction: [f64; 3],
         radius: f64,
         depth: f64,
@@ -172,6 +175,7 @@ pub enum Action {
     #[serde(rename = "probe_path")]
     ProbePath {
         radius: f64,
+        #[serde(deserialize_with = "crate::io::shape::numbers")]
         direction: [f64; 3],
         keys: Vec<PathKey>,
         sample_hz: f64,

@@ -13,6 +13,7 @@ pub struct PathKey {
     /// Time from the action's start, s.
     pub t: f64,
     /// The point the sphere touches at depth 0, metres.
+    #[serde(deserialize_with = "crate::io::shape::numbers")]
     pub at: [f64; 3],
     /// Depth along the direction, metres.
     pub depth: f64,
@@ -46,12 +47,14 @@ pub struct PathSample {
     /// Time from the action's start, s.
     pub t: f64,
     /// The point the sphere touches at depth 0, metres.
+    #[serde(deserialize_with = "crate::io::shape::numbers")]
     pub at: [f64; 3],
     /// Depth along the direction, metres.
     pub depth_m: f64,
     /// Force of the tissue on the probe along `-direction`, newtons.
     pub force_n: f64,
     /// Force of the tissue on the probe, newtons.
+    #[serde(deserialize_with = "crate::io::shape::numbers")]
     pub force: [f64; 3],
     /// What produced the force: the material's surface compliance (`surface`), or the model's
     /// surface nodes (`nodes`: asked for, or off the top face).
