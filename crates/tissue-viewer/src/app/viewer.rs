@@ -105,12 +105,15 @@ impl App {
             state.settings.tool = crate::app::state::ToolKind::Probe;
             let radius = state.settings.probe_radius_mm * 1e-3;
             let at = [x, y, crate::mechanics::grid::CUBE_SIDE_M];
-            requests.push(Request::Press(super::recording::Press {
-                at,
-                direction: Some([0.0, 0.0, -1.0]),
-                radius,
-                depth,
-            }));
+            let press = super::recording::Press { at, direction: Some([0.0, 0.0, -1.0]), radius, depth };
+            if record.is_some() {
+                // Recorded from its start on the material's contact: pressed once that is ready.
+                state.shown.tool = press.tool();
+                state.shown.last_probe = Some((press.centre(), press.radius));
+                state.deferred_press = Some(press);
+            } else {
+                requests.push(Request::Press(press));
+            }
         }
         let grid = state.grid();
         // The physics thread builds the model from its recipe: none is built here.

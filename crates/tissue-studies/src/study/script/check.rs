@@ -84,18 +84,20 @@ pub(super) fn check_script(script: &Script, object: &str) -> anyhow::Result<()> 
         anyhow::bail!("script: {total_samples} probe samples in all, above the bound of {MAX_SAMPLES}");
     }
     if let Some(r) = &script.recorded {
-        check_recorded(&r.force_path, &script.actions)?;
+        check_recorded(&r.force_path, &script.actions, script.dt)?;
     }
     Ok(())
 }
 
 /// The recorded samples of a recording agree with themselves and with their actions: each names
 /// a probe path, its numbers are finite, and its `force_n` is its force along the push (to
-/// 1e-6 of the force); the error names the sample (0-based, as in `force_path`).
-fn check_recorded(samples: &[super::PathSample], actions: &[Action]) -> anyhow::Result<()> {
+/// 1e-6 of the force), and no two are of one step of one action (`dt`); the error names the
+/// sample (0-based, as in `force_path`).
+fn check_recorded(samples: &[super::PathSample], actions: &[Action], dt: f64) -> anyhow::Result<()> {
     if samples.len() > MAX_SAMPLES {
         anyhow::bail!("script: {} recorded samples, above the bound of {MAX_SAMPLES}", samples.len());
     }
+    let mut steps = std::collections::HashMap::with_capacity(samples.len());
     for (k, s) in samples.iter().enumerate() {
         let say = |why: String| anyhow::anyhow!("script: recorded sample {k}: {why}");
         let Some(Action::ProbePath { direction, .. }) = actions.get(s.action) else {
@@ -104,6 +106,9 @@ fn check_recorded(samples: &[super::PathSample], actions: &[Action]) -> anyhow::
         let numbers = [s.t, s.depth_m, s.force_n].into_iter().chain(s.at).chain(s.force);
         if !numbers.into_iter().all(f64::is_finite) {
             return Err(say("its time, point, depth and forces must be finite numbers".into()));
+        }
+        if let Some(j) = steps.insert((s.action, (s.t / dt).round() as i64), k) {
+            return Err(say(format!("it is of the same step of action {} as recorded sample {j}", s.action)));
         }
         let d = glam::DVec3::from(*direction);
         let along = -glam::DVec3::from(s.force).dot(d / d.length());

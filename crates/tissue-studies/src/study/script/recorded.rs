@@ -32,7 +32,7 @@ pub struct Replay {
     /// Matched samples that differ in any recorded quantity (force, `force_n`, depth, point,
     /// contact) beyond round-off.
     pub mismatched: usize,
-    /// The first of them ([`MAX_LISTED`]), each as `sample K (action A, t = T s): what differs`.
+    /// The first of them (at most `MAX_LISTED`), each as `sample K (action A, t = T s): what differs`.
     pub mismatches: Vec<String>,
 }
 

@@ -104,9 +104,13 @@ impl Timeline {
     }
 
     /// A setting a script cannot change halfway: the recording starts afresh once the tissue is
-    /// at rest with nothing held.
+    /// at rest with nothing held (at once where nothing was done yet: the contact arriving
+    /// before the first press).
     pub fn setting_changed(&mut self, sim: &Simulation) {
-        if sim.time_s == 0.0 && sim.tool == Tool::None {
+        let untouched = self.actions.is_empty()
+            && matches!(self.current, Current::Wait)
+            && sim.tissue.kinetic_energy() < REST_ENERGY_J;
+        if sim.tool == Tool::None && (sim.time_s == 0.0 || untouched) {
             self.restart();
         } else {
             self.close(sim.dt);

@@ -130,6 +130,7 @@ impl ViewerState {
         let stale = self.compliance_stale;
         let stage = &mut self.compliance_stage;
         let compliances = &mut self.compliances;
+        let deferred = &mut self.deferred_press;
         let ended = self.compliance.poll(|m| match m {
             // Another material's: dropped.
             _ if stale => {}
@@ -142,12 +143,18 @@ impl ViewerState {
                 shown.contact_status = None;
                 *compliances = Some([Arc::clone(&c.compliance), background]);
                 send(Command::SetSurfaceProbe(Some(c)));
+                if let Some(p) = deferred.take() {
+                    send(Command::Press(p));
+                }
                 if let Some(e) = shown.exercise.as_mut().filter(|e| e.ready.is_none()) {
                     e.ready = Some(std::time::Instant::now());
                     e.felt = felt;
                 }
             }
             ComplianceMessage::Done(Err(e)) => {
+                if let Some(p) = deferred.take() {
+                    send(Command::Press(p));
+                }
                 shown.contact_status =
                     Some(format!("probe contact: the model's nodes (surface compliance failed: {e})"));
                 if shown.exercise.take_if(|e| e.ready.is_none()).is_some() {

@@ -105,6 +105,9 @@ pub struct ViewerState {
     compliance_stage: String,
     /// The felt material's surface compliance and its background's, once loaded.
     compliances: Option<[Arc<SurfaceCompliance>; 2]>,
+    /// A press that waits for the material's contact (`view --press` while recording, so that
+    /// the recording holds it, on one contact from its start).
+    pub deferred_press: Option<crate::sim::press::Press>,
     map: Slot<(u64, Result<PalpationMap, String>)>,
     /// Counts the materials and grids a map may be of: a map of an earlier one is dropped.
     map_generation: u64,
@@ -181,6 +184,7 @@ impl ViewerState {
             compliance_stale: false,
             compliance_stage: String::new(),
             compliances: None,
+            deferred_press: None,
             map: Slot::default(),
             map_generation: 0,
             wake: Arc::new(wake),
