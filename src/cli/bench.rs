@@ -12,8 +12,12 @@ pub struct BenchArgs {
     pub json: bool,
     /// Only the GPU's figures: its step alone and its 1 ms tick at 16^3, 32^3 and 64^3 against
     /// the CPU's (an error where no adapter computes).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "moving")]
     pub gpu: bool,
+    /// Only the viewer's 1 ms tick with the probe moving on the material's surface (pressing
+    /// and sliding; the default tissue at 8^3 and 12^3, the corotational FEM at 8^3).
+    #[arg(long)]
+    pub moving: bool,
 }
 
 /// Runs the benchmark and prints its report.
@@ -29,6 +33,14 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         )?;
         let report = crate::study::bench::gpu::measure(&gpu, &surface)?;
         return if args.json { say(&serde_json::to_string_pretty(&report)?) } else { say_raw(&report.to_text()) };
+    }
+    if args.moving {
+        let ticks = crate::study::bench::moving::run()?;
+        return if args.json {
+            say(&serde_json::to_string_pretty(&serde_json::json!({ "moving_probe_tick_s": ticks }))?)
+        } else {
+            say_raw(&crate::study::bench::moving::to_text(&ticks))
+        };
     }
     let report = crate::study::bench::run()?;
     if args.json { say(&serde_json::to_string_pretty(&report)?) } else { say_raw(&report.to_text()) }

@@ -75,11 +75,11 @@ pub fn run(args: PalpateArgs) -> anyhow::Result<()> {
     let range = |v: &[f64]| v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &f| (a.min(f), b.max(f)));
     let (low, high) = range(&map.forces);
     say(&format!(
-        "{}: {n} x {n} presses on face {}, probe {} mm pressed {} mm: force {low:.3} to {high:.3} N",
+        "{}: {n} x {n} presses on face {}, probe {} pressed {}: force {low:.3} to {high:.3} N",
         map.material,
         map.face,
-        crate::io::num(args.radius * 1e3),
-        crate::io::num(args.depth * 1e3),
+        crate::io::length(args.radius),
+        crate::io::length(args.depth),
         n = palpation.grid
     ))?;
     if let Some((peak, at)) = map.peak().filter(|_| !material.inclusions.is_empty()) {

@@ -14,6 +14,29 @@ pub fn num(v: f64) -> String {
     if (1e-4..1e7).contains(&shown.abs()) { format!("{shown}") } else { format!("{shown:e}") }
 }
 
+/// A length in metres as a person reads it: millimetres (`4.9 mm`, `11.3 mm`) from 0.1 mm up,
+/// micrometres below (`1 um`, `12 um`), four significant digits at most ([`num`]).
+///
+/// ```
+/// assert_eq!(tissue_core::io::length(0.0049), "4.9 mm");
+/// assert_eq!(tissue_core::io::length(1e-6), "1 um");
+/// ```
+pub fn length(m: f64) -> String {
+    if m != 0.0 && m.abs() < 1e-4 && m.is_finite() {
+        format!("{} um", num(round4(m * 1e6)))
+    } else {
+        format!("{} mm", num(round4(m * 1e3)))
+    }
+}
+
+/// `v` to four significant digits (as is where not finite or zero).
+fn round4(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    format!("{v:.3e}").parse().unwrap_or(v)
+}
+
 /// Longest quoted text a message repeats, characters.
 const MAX_QUOTED_CHARS: usize = 60;
 /// Longest message line, characters.

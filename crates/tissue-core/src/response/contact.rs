@@ -68,6 +68,15 @@ pub struct ContactScratch {
     next: Vec<usize>,
     /// The factorised normal compliance of the active set, column-major.
     matrix: Vec<f64>,
+    /// After a settled solve: each candidate out of contact's normal displacement under a unit
+    /// force at each contact (a row per such candidate, in the candidates' order), so that
+    /// [`resolve`] checks the contact without the body.
+    outside: Vec<f64>,
+    /// Whether `matrix` and `outside` belong to the active set now held (a settled solve).
+    settled: bool,
+    /// [`resolve`]'s memory: the factorised compliance's inverse times the contacts' normals
+    /// (three columns).
+    along: Vec<f64>,
     stack: MemBuffer,
     room: usize,
 }
@@ -90,6 +99,9 @@ impl ContactScratch {
             lambda: Vec::with_capacity(n),
             next: Vec::with_capacity(n),
             matrix: Vec::new(),
+            outside: Vec::new(),
+            settled: false,
+            along: Vec::new(),
             stack: MemBuffer::new(faer::dyn_stack::StackReq::EMPTY),
             room: 0,
         };
@@ -102,10 +114,20 @@ impl ContactScratch {
             return;
         }
         let factor = llt::factor::cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default());
-        let solve = llt::solve::solve_in_place_scratch::<f64>(n, 1, Par::Seq);
+        let solve = llt::solve::solve_in_place_scratch::<f64>(n, 3, Par::Seq);
         self.stack = MemBuffer::new(factor.or(solve));
         self.matrix.reserve(n * n);
+        self.outside.reserve(n * n);
+        self.along.reserve(3 * n);
         self.room = n;
+    }
+
+    /// No candidates, no contact, nothing to [`resolve`] on.
+    pub fn clear(&mut self) {
+        self.candidates.clear();
+        self.active.clear();
+        self.lambda.clear();
+        self.settled = false;
     }
 
     /// The contact force on the sphere, newtons (after a solve): minus the normal forces along
@@ -147,6 +169,7 @@ impl Default for ContactScratch {
 /// moved a little, settles in one or two iterations), or where it is empty every candidate of
 /// positive gap (which overshoots the contact: the surface sinks around the sphere).
 pub fn solve<C: Compliance + ?Sized>(body: &mut C, s: &mut ContactScratch, tol: f64) -> Result<(), ContactError> {
+    s.settled = false;
     let n = s.candidates.len();
     s.active.retain(|&q| q < n);
     if s.active.is_empty() {
@@ -156,7 +179,9 @@ pub fn solve<C: Compliance + ?Sized>(body: &mut C, s: &mut ContactScratch, tol: 
     s.active.dedup();
     for _ in 0..MAX_ITERATIONS {
         s.lambda.clear();
+        s.outside.clear();
         if s.active.is_empty() {
+            s.settled = true;
             return Ok(());
         }
         body.prepare(&s.active)?;
@@ -175,7 +200,9 @@ pub fn solve<C: Compliance + ?Sized>(body: &mut C, s: &mut ContactScratch, tol: 
             let (nq, gap) = s.candidates[q];
             let mut moved = 0.0;
             for (&j, &l) in s.active.iter().zip(&s.lambda) {
-                moved += l * body.normal(q, nq, j, s.candidates[j].0);
+                let w = body.normal(q, nq, j, s.candidates[j].0);
+                s.outside.push(w);
+                moved += l * w;
             }
             if moved < gap - tol {
                 s.next.push(q);
@@ -183,6 +210,7 @@ pub fn solve<C: Compliance + ?Sized>(body: &mut C, s: &mut ContactScratch, tol: 
         }
         s.next.sort_unstable();
         if s.next == s.active {
+            s.settled = true;
             return Ok(());
         }
         std::mem::swap(&mut s.next, &mut s.active);
@@ -191,6 +219,143 @@ pub fn solve<C: Compliance + ?Sized>(body: &mut C, s: &mut ContactScratch, tol: 
     s.active.clear();
     s.lambda.clear();
     Err(ContactError::NotSettled(MAX_ITERATIONS))
+}
+
+/// Solves the contact again for new gaps (written into `s.candidates`: the same candidates in
+/// the same order, their normals and gaps now) on the active set and the compliance of the last
+/// settled [`solve`], calling no body: `true` where that active set still holds (every force
+/// pushes and no other candidate ends inside by more than `tol`, metres), the forces in
+/// `s.lambda`; `false` where it does not (the forces are then not valid: a [`solve`] is owed,
+/// warm-started from `s.active`, the set this one points to).
+///
+/// The compliance is the one the last solve factorised less `n_i . change n_j` (`change`, metres
+/// per newton, a 3 x 3 part common to every pair of candidates, such as the material's slow modes
+/// read over the patch: exact, by the Woodbury identity, with three more solves on the kept
+/// factorisation), at the candidates' normals now in that part and at the last solve's elsewhere:
+/// a sphere that moved a little, as between two steps of a moving tool, is answered in
+/// microseconds. Allocates nothing.
+pub fn resolve(s: &mut ContactScratch, tol: f64, change: &[[f64; 3]; 3]) -> bool {
+    if !s.settled {
+        return false;
+    }
+    let m = s.active.len();
+    s.lambda.clear();
+    if m == 0 {
+        // The last solve's start: every candidate of positive gap.
+        return s.candidates.iter().all(|&(_, gap)| gap <= 0.0);
+    }
+    s.lambda.extend(s.active.iter().map(|&q| s.candidates[q].1));
+    let factor = MatRef::from_column_major_slice(&s.matrix[..m * m], m, m);
+    let solve = |b: &mut [f64], cols: usize, stack: &mut MemBuffer| {
+        llt::solve::solve_in_place_with_conj(
+            factor,
+            Conj::No,
+            MatMut::from_column_major_slice_mut(b, m, cols),
+            Par::Seq,
+            MemStack::new(stack),
+        );
+    };
+    solve(&mut s.lambda[..m], 1, &mut s.stack);
+    let dot = |a: [f64; 3], d: &[[f64; 3]; 3], b: [f64; 3]| -> f64 {
+        (0..3).map(|i| a[i] * (d[i][0] * b[0] + d[i][1] * b[1] + d[i][2] * b[2])).sum()
+    };
+    let changed = change.iter().flatten().any(|&v| v != 0.0);
+    if changed {
+        // (S - U D U^T)^-1 g = x + Y (I - D U^T Y)^-1 D U^T x, with x = S^-1 g, Y = S^-1 U and
+        // U the contacts' normals as rows.
+        s.along.clear();
+        for c in 0..3 {
+            s.along.extend(s.active.iter().map(|&q| s.candidates[q].0[c]));
+        }
+        solve(&mut s.along[..3 * m], 3, &mut s.stack);
+        let mut ut_y = [[0.0; 3]; 3];
+        let mut ut_x = [0.0; 3];
+        for (a, &q) in s.active.iter().enumerate() {
+            let n = s.candidates[q].0;
+            for i in 0..3 {
+                ut_x[i] += n[i] * s.lambda[a];
+                for (j, u) in ut_y[i].iter_mut().enumerate() {
+                    *u += n[i] * s.along[j * m + a];
+                }
+            }
+        }
+        // I - D U^T Y and D U^T x.
+        let mut k = [[0.0; 3]; 3];
+        let mut rhs = [0.0; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                k[i][j] = f64::from(u8::from(i == j)) - (0..3).map(|l| change[i][l] * ut_y[l][j]).sum::<f64>();
+            }
+            rhs[i] = (0..3).map(|l| change[i][l] * ut_x[l]).sum();
+        }
+        let Some(w) = solve3(k, rhs) else {
+            s.lambda.clear();
+            s.settled = false;
+            return false;
+        };
+        for a in 0..m {
+            s.lambda[a] += (0..3).map(|j| s.along[j * m + a] * w[j]).sum::<f64>();
+        }
+    }
+    // The contact's net normal push, for the change's part of the check.
+    let mut net = [0.0; 3];
+    if changed {
+        for (a, &q) in s.active.iter().enumerate() {
+            let n = s.candidates[q].0;
+            for c in 0..3 {
+                net[c] += n[c] * s.lambda[a];
+            }
+        }
+    }
+    // The next active set as the solve would take it: the contacts that push, and every other
+    // candidate that ends inside.
+    s.next.clear();
+    let mut rows = s.outside.chunks_exact(m);
+    let mut a = 0;
+    for q in 0..s.candidates.len() {
+        if a < m && s.active[a] == q {
+            if s.lambda[a] > 0.0 {
+                s.next.push(q);
+            }
+            a += 1;
+            continue;
+        }
+        let row = rows.next().unwrap_or(&[]);
+        let mut moved: f64 = row.iter().zip(&s.lambda).map(|(w, l)| w * l).sum();
+        if changed {
+            moved -= dot(s.candidates[q].0, change, net);
+        }
+        if moved < s.candidates[q].1 - tol {
+            s.next.push(q);
+        }
+    }
+    let holds = s.next == s.active;
+    if !holds {
+        // Not valid: the solve owed starts from the set this one points to.
+        s.lambda.clear();
+        std::mem::swap(&mut s.next, &mut s.active);
+        s.settled = false;
+    }
+    holds
+}
+
+/// The solution of the 3 x 3 system `k x = b` (Cramer's rule), or `None` where `k` is singular.
+fn solve3(k: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+    let det3 = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det3(k);
+    if !(d.is_finite() && d.abs() > 1e-12) {
+        return None;
+    }
+    Some(std::array::from_fn(|c| {
+        let mut m = k;
+        for r in 0..3 {
+            m[r][c] = b[r];
+        }
+        det3(m) / d
+    }))
 }
 
 /// Factorises the active set's normal compliance (symmetrised: columns solved in f32, or
@@ -263,6 +428,89 @@ mod tests {
                 }
             }
             assert!(s.force()[2] < 0.0);
+        }
+    }
+
+    /// Solved again for gaps that moved a little, on the last solve's active set and compliance:
+    /// the same forces as a full solve where the contact holds, and a solve owed where a
+    /// candidate enters or leaves.
+    #[test]
+    fn a_resolve_is_the_solve_while_the_contact_holds_and_owes_one_when_it_changes() {
+        let gaps = [1e-3, 4e-4, -2e-4, 2e-4, -1e-3, 8e-4];
+        let mut body = Chain(vec![1e-4, 2e-4, 1e-4, 3e-4, 1e-4, 1e-4], 5e-5);
+        let mut s = ContactScratch::with_room(6);
+        s.candidates.extend(gaps.iter().map(|&g| ([0.0, 0.0, 1.0], g)));
+        assert!(!resolve(&mut s, 1e-15, &[[0.0; 3]; 3]), "nothing solved yet");
+        solve(&mut body, &mut s, 1e-15).expect("settles");
+        let active = s.active.clone();
+        // Every gap 1 % deeper: the same contact, forces 1 % larger.
+        for c in &mut s.candidates {
+            c.1 *= 1.01;
+        }
+        assert!(resolve(&mut s, 1e-15, &[[0.0; 3]; 3]));
+        let again = s.lambda.clone();
+        let mut full = ContactScratch::with_room(6);
+        full.candidates.extend(gaps.iter().map(|&g| ([0.0, 0.0, 1.0], 1.01 * g)));
+        solve(&mut body, &mut full, 1e-15).expect("settles");
+        assert_eq!(full.active, active);
+        for (a, b) in again.iter().zip(&full.lambda) {
+            assert!((a - b).abs() < 1e-12 * b.abs(), "{a} {b}");
+        }
+        // A candidate out of contact pushed deep: the contact changes, a solve is owed.
+        let outside = (0..6).find(|q| !active.contains(q)).expect("one out of contact");
+        s.candidates[outside].1 = 5e-3;
+        assert!(!resolve(&mut s, 1e-15, &[[0.0; 3]; 3]));
+        s.clear();
+        assert!(!resolve(&mut s, 1e-15, &[[0.0; 3]; 3]), "cleared");
+    }
+
+    /// A chain less a common 3 x 3 part read along the candidates' normals (as the material's
+    /// slow modes are folded into the surface's contact).
+    struct Coupled(Chain, [[f64; 3]; 3]);
+
+    impl Compliance for Coupled {
+        fn normal(&self, i: usize, n_i: [f64; 3], j: usize, n_j: [f64; 3]) -> f64 {
+            let g = &self.1;
+            self.0.normal(i, n_i, j, n_j)
+                - (0..3).map(|a| n_i[a] * (g[a][0] * n_j[0] + g[a][1] * n_j[1] + g[a][2] * n_j[2])).sum::<f64>()
+        }
+    }
+
+    /// The common part changed since the solve: the resolve's forces are the full solve's with
+    /// the new part (Woodbury), and its check of the candidates out of contact too.
+    #[test]
+    fn a_resolve_takes_a_changed_common_part_exactly() {
+        let gaps = [1e-3, 4e-4, -2e-4, 2e-4, -1e-3, 8e-4];
+        let normals: Vec<[f64; 3]> = (0..6)
+            .map(|q| {
+                let t = 0.2 * (q as f64 - 2.5);
+                [t.sin(), 0.3 * t, -t.cos()]
+            })
+            .map(|n: [f64; 3]| {
+                let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                n.map(|c| c / l)
+            })
+            .collect();
+        let chain = || Chain(vec![1e-4, 2e-4, 1e-4, 3e-4, 1e-4, 1e-4], 5e-5);
+        let (g1, g2) = ([[2e-5, 1e-6, 0.0], [1e-6, 1e-5, 0.0], [0.0, 0.0, 3e-5]], [
+            [2.2e-5, 1.5e-6, 1e-7],
+            [1.5e-6, 1.1e-5, 0.0],
+            [1e-7, 0.0, 2.7e-5],
+        ]);
+        let setup = |g| {
+            let mut s = ContactScratch::with_room(6);
+            s.candidates.extend(gaps.iter().zip(&normals).map(|(&g, &n)| (n, g)));
+            (Coupled(chain(), g), s)
+        };
+        let (mut body, mut s) = setup(g1);
+        solve(&mut body, &mut s, 1e-15).expect("settles");
+        let change: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| g2[i][j] - g1[i][j]));
+        assert!(resolve(&mut s, 1e-15, &change), "the contact holds");
+        let (mut full_body, mut full) = setup(g2);
+        solve(&mut full_body, &mut full, 1e-15).expect("settles");
+        assert_eq!(full.active, s.active);
+        for (a, b) in s.lambda.iter().zip(&full.lambda) {
+            assert!((a - b).abs() < 1e-9 * b.abs(), "{a} {b}");
         }
     }
 

@@ -227,16 +227,16 @@ fn inside_by(p: DVec3) -> f64 {
 pub fn check_radius(radius: f64) -> Result<(), String> {
     if radius.is_nan() || radius < MIN_RADIUS_M {
         return Err(format!(
-            "a probe of radius {} mm is smaller than the material's surface grid resolves (2 mm nodes): the radius \
+            "a probe of radius {} is smaller than the material's surface grid resolves (2 mm nodes): the radius \
              must be at least {} mm",
-            crate::io::num(radius * 1e3),
+            crate::io::length(radius),
             MIN_RADIUS_M * 1e3
         ));
     }
     if radius > MAX_RADIUS_M {
         return Err(format!(
-            "a probe of radius {} mm is wider than the contact can hold: the radius must be at most {} mm",
-            crate::io::num(radius * 1e3),
+            "a probe of radius {} is wider than the contact can hold: the radius must be at most {} mm",
+            crate::io::length(radius),
             MAX_RADIUS_M * 1e3
         ));
     }
@@ -257,27 +257,27 @@ pub fn check(
     check_radius(radius)?;
     if depth > MAX_DEPTH_OF_RADIUS * radius {
         return Err(format!(
-            "depth {} mm is deeper than a probe of radius {} mm can be pressed (at most {} of its radius, {} mm)",
-            crate::io::num(depth * 1e3),
-            crate::io::num(radius * 1e3),
+            "depth {} is deeper than a probe of radius {} can be pressed (at most {} of its radius, {})",
+            crate::io::length(depth),
+            crate::io::length(radius),
             MAX_DEPTH_OF_RADIUS,
-            crate::io::num(MAX_DEPTH_OF_RADIUS * radius * 1e3)
+            crate::io::length(MAX_DEPTH_OF_RADIUS * radius)
         ));
     }
     let (p, dir) = (DVec3::from(at), DVec3::from(direction).normalize());
     let under = inside_by(p);
     if under > ON_SURFACE_M {
         return Err(format!(
-            "the probe point {at:?} lies {} mm inside the tissue: a press starts on or outside its surface",
-            crate::io::num(under * 1e3)
+            "the probe point {at:?} lies {} inside the tissue: a press starts on or outside its surface",
+            crate::io::length(under)
         ));
     }
     // The sphere at its depth must overlap the tissue.
     let c = DVec3::from(centre(at, dir, radius, depth));
     if depth > 0.0 && c.distance(c.clamp(DVec3::ZERO, DVec3::splat(CUBE_SIDE_M))) >= radius {
         return Err(format!(
-            "the press does not enter the tissue: from {at:?} along {direction:?}, {} mm deep, the probe stays outside",
-            crate::io::num(depth * 1e3)
+            "the press does not enter the tissue: from {at:?} along {direction:?}, {} deep, the probe stays outside",
+            crate::io::length(depth)
         ));
     }
     if under > -ON_SURFACE_M && fixed(at) {
@@ -289,10 +289,10 @@ pub fn check(
         let nodes = window_count(DEFAULT_DIVISIONS, centre(at, dir, radius, depth), radius);
         if nodes > MAX_CONTACT_NODES {
             return Err(format!(
-                "a probe of radius {} mm pressed {} mm is wider than the contact can hold: it covers {nodes} nodes \
+                "a probe of radius {} pressed {} is wider than the contact can hold: it covers {nodes} nodes \
                  of the surface, above the bound of {MAX_CONTACT_NODES}",
-                crate::io::num(radius * 1e3),
-                crate::io::num(depth * 1e3)
+                crate::io::length(radius),
+                crate::io::length(depth)
             ));
         }
     }

@@ -293,12 +293,18 @@ impl ForceTrace {
         self.values[(self.head + TRACE_LEN - self.len + i) % TRACE_LEN]
     }
 
-    /// Draws the last force and the trace in a small box with its top-left corner at `at`.
-    pub fn draw(&self, painter: &egui::Painter, at: egui::Pos2) {
+    /// The box [`ForceTrace::draw`] fills, with or without a line on the contact.
+    pub fn size(with_note: bool) -> egui::Vec2 {
+        egui::vec2(if with_note { 230.0 } else { 150.0 }, if with_note { 74.0 } else { 56.0 })
+    }
+
+    /// Draws the last force and the trace in a small box with its top-left corner at `at`, and
+    /// under the force `note` (in orange: the force is not the material's, and why) where given.
+    pub fn draw(&self, painter: &egui::Painter, at: egui::Pos2, note: Option<&str>) {
         if self.len == 0 {
             return;
         }
-        let size = egui::vec2(150.0, 56.0);
+        let size = Self::size(note.is_some());
         let frame = egui::Rect::from_min_size(at, size);
         painter.rect_filled(frame, 4.0, egui::Color32::from_black_alpha(170));
         let last = self.sample(self.len - 1);
@@ -309,6 +315,20 @@ impl ForceTrace {
             egui::FontId::proportional(16.0),
             egui::Color32::WHITE,
         );
+        let at = match note {
+            Some(note) => {
+                painter.text(
+                    at + egui::vec2(6.0, 24.0),
+                    egui::Align2::LEFT_TOP,
+                    note,
+                    egui::FontId::proportional(12.0),
+                    egui::Color32::from_rgb(255, 170, 60),
+                );
+                at + egui::vec2(0.0, 18.0)
+            }
+            None => at,
+        };
+        let size = egui::vec2(size.x, 56.0);
         let top = (0..self.len).map(|i| self.sample(i)).fold(1e-3f32, f32::max);
         let plot = egui::Rect::from_min_max(at + egui::vec2(6.0, 24.0), at + size - egui::vec2(6.0, 4.0));
         let points: Vec<egui::Pos2> = (0..self.len)

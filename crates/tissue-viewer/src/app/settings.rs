@@ -125,6 +125,9 @@ pub struct Shown {
     pub material_file: Option<std::path::PathBuf>,
     /// The probe's contact: what the surface compliance job says (`None`: ready or not asked).
     pub contact_status: Option<String>,
+    /// While the material's surface is not the probe's yet: when it will be, for the tag beside
+    /// the sphere (`the material's in 12 s`, `the material's: loading`, or why never).
+    pub material_contact_in: Option<String>,
     /// The parameters of the running model (the panel edits a copy).
     pub params: MsmParams,
     /// Integrator asked for (`None`: automatic).

@@ -269,9 +269,17 @@ impl App {
             rect.top() + 0.5 * (1.0 - ndc.y) * rect.height(),
         );
         // Beside the sphere, kept inside the view.
+        // Where the force is not the material's: which contact gave it, and when the
+        // material's will (`model nodes, the material's in 12 s`).
+        let nodes =
+            self.latest.probe.map_or(!self.latest.surface_probe, |r| r.contact == crate::sim::press::Contact::Nodes);
+        let note = nodes.then(|| match &self.state.shown.material_contact_in {
+            Some(when) => format!("model nodes, {when}"),
+            None => "model nodes".to_owned(),
+        });
         let offset = egui::vec2(30.0 + 400.0 * radius as f32, -80.0);
-        let corner = (at + offset).clamp(rect.min, rect.max - egui::vec2(150.0, 56.0));
-        self.trace.draw(painter, corner);
+        let corner = (at + offset).clamp(rect.min, rect.max - ForceTrace::size(note.is_some()));
+        self.trace.draw(painter, corner, note.as_deref());
     }
 
     fn frame(&mut self) -> anyhow::Result<()> {

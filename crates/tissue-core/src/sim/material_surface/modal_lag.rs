@@ -108,6 +108,40 @@ pub struct ModalLag {
     /// Where the contact's net force acts and the lag is read: grid nodes and weights (summing to
     /// 1).
     patch: Vec<(usize, f64)>,
+    /// Each mode's shape averaged over the patch.
+    phi: Vec<[f64; 3]>,
+    /// Each mode's free motion over a step ([`propagator`]) and the step it is for (a moving
+    /// tool's steps are all alike: the exponentials and sines once, not at every step).
+    stepped: Propagators,
+    /// The same over the span a contact's force is held over.
+    held: Propagators,
+}
+
+/// [`propagator`] of every mode over one span, kept while the span and the damping stay.
+#[derive(Debug, Clone)]
+struct Propagators {
+    span: f64,
+    of_mode: Vec<(f64, f64, f64)>,
+}
+
+impl Propagators {
+    fn new(modes: usize) -> Self {
+        Self { span: f64::NAN, of_mode: Vec::with_capacity(modes) }
+    }
+
+    /// Every mode's over `span` (computed where the span is new).
+    fn over(&mut self, span: f64, omega: &[f64], a: f64) -> &[(f64, f64, f64)] {
+        if self.span != span || self.of_mode.len() != omega.len() {
+            self.of_mode.clear();
+            self.of_mode.extend(omega.iter().map(|&w| propagator(w, a, span)));
+            self.span = span;
+        }
+        &self.of_mode
+    }
+
+    fn forget(&mut self) {
+        self.span = f64::NAN;
+    }
 }
 
 impl ModalLag {
@@ -122,12 +156,17 @@ impl ModalLag {
             qdot: vec![0.0; k],
             force: vec![0.0; k],
             patch: Vec::with_capacity(nodes),
+            phi: vec![[0.0; 3]; k],
+            stepped: Propagators::new(k),
+            held: Propagators::new(k),
         }
     }
 
     /// Damps by the ratio `zeta` at the fundamental from now on.
     pub fn set_damping_ratio(&mut self, zeta: f64) {
         self.half_alpha = zeta * self.basis.omega.first().copied().unwrap_or(0.0);
+        self.stepped.forget();
+        self.held.forget();
     }
 
     /// Back to rest.
@@ -165,18 +204,15 @@ impl ModalLag {
         for p in &mut self.patch {
             p.1 /= total;
         }
-    }
-
-    /// Mode `k`'s shape averaged over the patch.
-    fn patch_shape(&self, k: usize) -> [f64; 3] {
-        let shape = &self.basis.shape[k];
-        let mut phi = [0.0; 3];
-        for &(t, w) in &self.patch {
-            for (d, p) in phi.iter_mut().enumerate() {
-                *p += w * shape[3 * t + d];
+        for (k, phi) in self.phi.iter_mut().enumerate() {
+            let shape = &self.basis.shape[k];
+            *phi = [0.0; 3];
+            for &(t, w) in &self.patch {
+                for (d, p) in phi.iter_mut().enumerate() {
+                    *p += w * shape[3 * t + d];
+                }
             }
         }
-        phi
     }
 
     /// The modes' response over the patch at the end of `span` seconds to a net force `F` on the
@@ -187,13 +223,13 @@ impl ModalLag {
     /// contact folds `-G` into its compliance, so that one contact solve gives the force the
     /// modes then reach ([`ModalLag::hold`] and [`ModalLag::advance`]): collocated, the contact
     /// and the modes exchange no energy that is not there. Allocates nothing.
-    pub fn response_after(&self, span: f64) -> ([f64; 3], [[f64; 3]; 3]) {
+    pub fn response_after(&mut self, span: f64) -> ([f64; 3], [[f64; 3]; 3]) {
         let (mut free, mut g) = ([0.0; 3], [[0.0; 3]; 3]);
         let a = self.half_alpha;
-        for k in 0..self.basis.omega.len() {
+        let held = self.held.over(span, &self.basis.omega, a);
+        for (k, &(e, c, s)) in held.iter().enumerate() {
             let w = self.basis.omega[k];
-            let (e, c, s) = propagator(w, a, span);
-            let phi = self.patch_shape(k);
+            let phi = self.phi[k];
             let moving = e * (self.q[k] * c + (self.qdot[k] + a * self.q[k]) * s);
             let gk = e * (c + a * s) / (w * w);
             for i in 0..3 {
@@ -208,21 +244,20 @@ impl ModalLag {
 
     /// Holds the net force `net` (newtons, on the tissue) spread over the patch, from now on.
     pub fn hold(&mut self, net: [f64; 3]) {
-        for k in 0..self.force.len() {
-            let phi = self.patch_shape(k);
-            self.force[k] = phi[0] * net[0] + phi[1] * net[1] + phi[2] * net[2];
+        for (f, phi) in self.force.iter_mut().zip(&self.phi) {
+            *f = phi[0] * net[0] + phi[1] * net[1] + phi[2] * net[2];
         }
     }
 
     /// Advances every coordinate by `dt` under the modal forces set (held over the step),
     /// exactly (under- or overdamped).
     pub fn advance(&mut self, dt: f64) {
-        for k in 0..self.q.len() {
+        let a = self.half_alpha;
+        let stepped = self.stepped.over(dt, &self.basis.omega, a);
+        for (k, &(e, c, s_over_wd)) in stepped.iter().enumerate() {
             let w = self.basis.omega[k];
-            let a = self.half_alpha;
             let qs = self.force[k] / (w * w);
             let (y, ydot) = (self.q[k] - qs, self.qdot[k]);
-            let (e, c, s_over_wd) = propagator(w, a, dt);
             let b = ydot + a * y;
             self.q[k] = qs + e * (y * c + b * s_over_wd);
             // y' = e^(-a t) (y' cos - (a y' + w^2 y) sin / wd).
@@ -265,12 +300,12 @@ mod tests {
         lag.set_patch([(x, 1.0)].into_iter());
         lag.hold(net);
         // The lag over the patch: `free - G F` with the force held.
-        let behind = |l: &ModalLag| {
+        let behind = |l: &mut ModalLag| {
             let (free, g) = l.response_after(0.0);
             free[2] - (0..3).map(|j| g[2][j] * net[j]).sum::<f64>()
         };
         // At once the surface lags by the whole static answer of the modes: it is higher.
-        let first = behind(&lag);
+        let first = behind(&mut lag);
         assert!(first > 0.0, "{first}");
         // Stepped in 1 ms steps or 0.1 ms steps: the same motion at the same times.
         let mut fine = lag.clone();
@@ -280,7 +315,7 @@ mod tests {
                 fine.advance(1e-4);
             }
         }
-        let (a, b) = (behind(&lag), behind(&fine));
+        let (a, b) = (behind(&mut lag), behind(&mut fine));
         assert!((a - b).abs() < 1e-9 * first.abs(), "{a} {b}");
         // Read 5 ms ahead, the exact step agrees with stepping there.
         let ahead = {
@@ -289,11 +324,11 @@ mod tests {
         };
         let mut stepped = lag.clone();
         stepped.advance(5e-3);
-        assert!((ahead - behind(&stepped)).abs() < 1e-9 * first.abs(), "{ahead}");
+        assert!((ahead - behind(&mut stepped)).abs() < 1e-9 * first.abs(), "{ahead}");
         for _ in 0..2000 {
             lag.advance(1e-3);
         }
-        let settled = behind(&lag);
+        let settled = behind(&mut lag);
         assert!(settled.abs() < 1e-6 * first, "{settled}");
     }
 }

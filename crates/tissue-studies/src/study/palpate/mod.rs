@@ -114,11 +114,11 @@ impl Palpation {
         let (at, least) = self.shallowest_touching();
         if self.depth < least {
             return Err(format!(
-                "depth {} mm: the press at {} mm touches none of the material's surface nodes; every press of the \
-                 grid touches from {} mm deep",
-                crate::io::num(self.depth * 1e3),
+                "depth {}: the press at {} mm touches none of the material's surface nodes; every press of the \
+                 grid touches from {} deep",
+                crate::io::length(self.depth),
                 at.map(|c| crate::io::num(c * 1e3)).join(", "),
-                crate::io::num((least * 1e3 * 1e3).ceil() / 1e3)
+                crate::io::length((least * 1e6).ceil() * 1e-6)
             ));
         }
         Ok(())

@@ -39,11 +39,11 @@ fn draw<'a>(map: &PalpationMap, rgb: &'a mut [u8]) -> Result<(), Box<dyn std::er
     root.fill(&WHITE)?;
     let (left, right) = root.split_horizontally(SIZE.0 - BAR);
     let title = format!(
-        "{}: face {}, probe {} mm pressed {} mm",
+        "{}: face {}, probe {} pressed {}",
         map.material,
         map.face,
-        crate::io::num(map.radius_m * 1e3),
-        crate::io::num(map.depth_m * 1e3)
+        crate::io::length(map.radius_m),
+        crate::io::length(map.depth_m)
     );
     let mut chart = ChartBuilder::on(&left)
         .caption(title, ("sans-serif", 22))

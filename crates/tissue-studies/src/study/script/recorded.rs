@@ -64,11 +64,7 @@ fn differences(r: &PathSample, p: &PathSample) -> Vec<String> {
         out.push(format!("force_n {} N recorded, {} N replayed", crate::io::num(r.force_n), crate::io::num(p.force_n)));
     }
     if !close(r.depth_m, p.depth_m, 1e-3) {
-        out.push(format!(
-            "depth {} mm recorded, {} mm replayed",
-            crate::io::num(r.depth_m * 1e3),
-            crate::io::num(p.depth_m * 1e3)
-        ));
+        out.push(format!("depth {} recorded, {} replayed", crate::io::length(r.depth_m), crate::io::length(p.depth_m)));
     }
     if !(0..3).all(|c| close(r.at[c], p.at[c], 1e-3)) {
         out.push(format!("point {:?} m recorded, {:?} m replayed", r.at, p.at));

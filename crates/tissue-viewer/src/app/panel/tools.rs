@@ -76,12 +76,7 @@ pub fn show(
         });
     }
     if settings.tool == ToolKind::Probe {
-        super::fitted_plot(ui, "force_depth", "probe depth (mm)", "probe force (N)")
-            .include_x(0.0)
-            .include_y(0.0)
-            .show(ui, |p| {
-                p.line(Line::new("force vs depth", PlotPoints::from(shown.force_depth.clone())));
-            });
+        force_depth_plot(ui, shown, ctx);
     }
     ui.separator();
     ui.label("Paper's load case (clamped face, force on the opposite face):");
@@ -145,6 +140,21 @@ fn probe_settings(ui: &mut egui::Ui, settings: &mut ViewSettings) {
     ui.checkbox(&mut settings.probe_along_view, "push along the view ray instead");
     let (lo, hi) = (crate::sim::press::MIN_RADIUS_M * 1e3, crate::sim::press::MAX_RADIUS_M * 1e3);
     ui.add(egui::Slider::new(&mut settings.probe_radius_mm, lo..=hi).text("probe radius (mm)"));
+}
+
+/// The probe's force against its depth since the press began, and which contact gave it where
+/// that is not the material's.
+fn force_depth_plot(ui: &mut egui::Ui, shown: &Shown, ctx: &PanelContext<'_>) {
+    if !ctx.published.surface_probe {
+        let when = shown.material_contact_in.as_deref().map_or(String::new(), |w| format!(", {w}"));
+        ui.colored_label(egui::Color32::from_rgb(255, 170, 60), format!("force from the model nodes{when}"));
+    }
+    super::fitted_plot(ui, "force_depth", "probe depth (mm)", "probe force (N)").include_x(0.0).include_y(0.0).show(
+        ui,
+        |p| {
+            p.line(Line::new("force vs depth", PlotPoints::from(shown.force_depth.clone())));
+        },
+    );
 }
 
 /// What the probe touches: the material's surface compliance, or the model's nodes until it is

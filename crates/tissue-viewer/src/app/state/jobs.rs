@@ -76,6 +76,8 @@ impl ViewerState {
         });
         let wake = Arc::clone(&self.wake);
         self.shown.contact_status = Some("probe contact: the material's surface compliance is loading".into());
+        self.shown.material_contact_in = Some("the material's: loading".into());
+        self.compliance_since = std::time::Instant::now();
         let started = self.compliance.start(
             "surface compliance",
             move || wake(),
@@ -121,6 +123,7 @@ impl ViewerState {
         );
         if let Err(e) = started {
             self.shown.contact_status = Some(format!("probe contact: the model's nodes ({e})"));
+            self.shown.material_contact_in = Some("the material's: not computed".into());
         }
     }
 
@@ -131,16 +134,27 @@ impl ViewerState {
         let stage = &mut self.compliance_stage;
         let compliances = &mut self.compliances;
         let deferred = &mut self.deferred_press;
+        let since = &mut self.compliance_since;
         let ended = self.compliance.poll(|m| match m {
             // Another material's: dropped.
             _ if stale => {}
-            ComplianceMessage::Stage(what) => *stage = what,
+            ComplianceMessage::Stage(what) => {
+                *stage = what;
+                *since = std::time::Instant::now();
+            }
             ComplianceMessage::Progress(f) => {
-                shown.contact_status =
-                    Some(format!("probe contact: computing {stage}, {:.0} % (meanwhile as before)", 100.0 * f));
+                let left = time_left(since.elapsed().as_secs_f64(), f);
+                let eta = left.as_ref().map_or(String::new(), |s| format!(", about {s} left"));
+                shown.contact_status = Some(format!(
+                    "probe contact: computing {stage}, {:.0} %{eta} (meanwhile the model's nodes push back)",
+                    100.0 * f
+                ));
+                shown.material_contact_in =
+                    Some(left.map_or_else(|| "the material's: computing".into(), |s| format!("the material's in {s}")));
             }
             ComplianceMessage::Done(Ok((c, background, felt))) => {
                 shown.contact_status = None;
+                shown.material_contact_in = None;
                 *compliances = Some([Arc::clone(&c.compliance), background]);
                 send(Command::SetSurfaceProbe(Some(c)));
                 if let Some(p) = deferred.take() {
@@ -157,6 +171,7 @@ impl ViewerState {
                 }
                 shown.contact_status =
                     Some(format!("probe contact: the model's nodes (surface compliance failed: {e})"));
+                shown.material_contact_in = Some("the material's failed".into());
                 if shown.exercise.take_if(|e| e.ready.is_none()).is_some() {
                     shown.note = Some(format!("the hidden lump cannot be felt, so it is gone: {e}"));
                 }
@@ -164,6 +179,7 @@ impl ViewerState {
         });
         if let Some(super::super::worker::State::Stopped(why)) = &ended {
             self.shown.contact_status = Some(format!("probe contact: the model's nodes (the job stopped: {why})"));
+            self.shown.material_contact_in = Some("the material's stopped".into());
         }
         if ended.is_some() && stale {
             self.compliance_stale = false;
@@ -340,4 +356,14 @@ impl ViewerState {
         self.shown.face_map = None;
         self.map_generation += 1;
     }
+}
+
+/// The time left of a job `f` done (0 to 1) after `elapsed_s` seconds, as a person reads it
+/// (`12 s`, `2 min`), at its rate so far; `None` before 2 % (no rate to tell yet).
+fn time_left(elapsed_s: f64, f: f64) -> Option<String> {
+    if !(0.02..1.0).contains(&f) {
+        return None;
+    }
+    let left = elapsed_s * (1.0 - f) / f;
+    Some(if left < 90.0 { format!("{:.0} s", left.max(1.0)) } else { format!("{:.0} min", left / 60.0) })
 }

@@ -101,6 +101,9 @@ pub struct ViewerState {
     /// The material changed while a surface compliance was computed: its result is dropped and
     /// the new material's started when it ends.
     compliance_stale: bool,
+    /// When the surface compliance job started what it computes now (its estimate of the time
+    /// left is read from here).
+    compliance_since: std::time::Instant,
     /// What the surface compliance job computes now.
     compliance_stage: String,
     /// The felt material's surface compliance and its background's, once loaded.
@@ -150,6 +153,7 @@ impl ViewerState {
             settings: ViewSettings::default(),
             shown: Shown {
                 contact_status: None,
+                material_contact_in: None,
                 material,
                 material_file: None,
                 params,
@@ -182,6 +186,7 @@ impl ViewerState {
             fem_probe: Slot::default(),
             compliance: Slot::default(),
             compliance_stale: false,
+            compliance_since: std::time::Instant::now(),
             compliance_stage: String::new(),
             compliances: None,
             deferred_press: None,

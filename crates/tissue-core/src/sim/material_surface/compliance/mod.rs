@@ -261,10 +261,12 @@ impl SurfaceCompliance {
         coupling: &[[f64; 3]; 3],
         scratch: &mut SurfaceContactScratch,
     ) -> Result<[f64; 3], ComplianceError> {
-        let SurfaceContactScratch { contact: c, nodes, points, sources, previous } = scratch;
-        c.candidates.clear();
-        c.active.clear();
-        c.lambda.clear();
+        if scratch.follows(centre, radius) && self.follow(centre, radius, shift, coupling, scratch) {
+            return Ok(scratch.contact.force());
+        }
+        scratch.factored = None;
+        let SurfaceContactScratch { contact: c, nodes, points, sources, previous, .. } = scratch;
+        c.clear();
         nodes.clear();
         points.clear();
         sources.clear();
@@ -302,9 +304,70 @@ impl SurfaceCompliance {
         solved?;
         previous.extend(c.active.iter().map(|&w| nodes[w]));
         previous.sort_unstable();
-        Ok(c.force())
+        scratch.factored = Some(Factored { centre, radius, coupling: *coupling });
+        Ok(scratch.contact.force())
+    }
+
+    /// The last solve's contact followed to the sphere at `centre` (the same radius, the
+    /// candidates' window the same nodes): the gaps there with the surface's `shift`, solved on
+    /// the last solve's active set and compliance with the modes' `coupling` now in place of the
+    /// one it was factorised with ([`contact::resolve`]). `false` where the window or the contact
+    /// changed: a solve is owed.
+    fn follow(
+        &self,
+        centre: [f64; 3],
+        radius: f64,
+        shift: [f64; 3],
+        coupling: &[[f64; 3]; 3],
+        scratch: &mut SurfaceContactScratch,
+    ) -> bool {
+        let SurfaceContactScratch { contact: c, nodes, window, previous, factored, .. } = scratch;
+        let Some(factored) = factored else { return false };
+        let change: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| coupling[i][j] - factored.coupling[i][j]));
+        window.clear();
+        let d = self.lattice.last();
+        let mut same = true;
+        for_window(&self.lattice.coords, centre, radius, |q, x| {
+            let Some(index) = self.lattice.index(q) else { return true };
+            if nodes.get(window.len()) != Some(&index) {
+                same = false;
+                return false;
+            }
+            let (n, depth) = contact::sphere_gap(centre, radius, x, outward(q, d));
+            window.push((n, depth - (n[0] * shift[0] + n[1] * shift[1] + n[2] * shift[2])));
+            true
+        });
+        if !same || window.len() != nodes.len() {
+            return false;
+        }
+        c.candidates.clear();
+        c.candidates.extend_from_slice(window);
+        if contact::resolve(c, 1e-9 * radius, &change) {
+            return true;
+        }
+        // The solve owed starts from the contact the followed one points to.
+        previous.clear();
+        previous.extend(c.active.iter().map(|&w| nodes[w]));
+        previous.sort_unstable();
+        false
     }
 }
+
+/// Where the compliance of the last solve's active set was factorised: the sphere and the modes'
+/// coupling folded in.
+#[derive(Debug, Clone, Copy)]
+struct Factored {
+    centre: [f64; 3],
+    radius: f64,
+    coupling: [[f64; 3]; 3],
+}
+
+/// How far the sphere may move from where its contact's compliance was factorised before the
+/// contact is solved afresh, metres (the sphere's normals at the contact nodes, and so the
+/// contact's compliance, turn by about this over the radius).
+pub const FOLLOW_M: f64 = 2e-4;
+
+
 
 /// The outward normal of the surface at lattice point `q` (the sum of its faces' on an edge).
 fn outward(q: [usize; 3], d: usize) -> [f64; 3] {
@@ -438,15 +501,24 @@ pub struct SurfaceContactScratch {
     sources: Vec<Source>,
     /// The surface nodes in contact at the last solve, increasing (the next solve's warm start).
     previous: Vec<usize>,
+    /// The candidates' normals and gaps where the sphere is now (a followed contact's).
+    window: Vec<([f64; 3], f64)>,
+    /// Where the last solve factorised its compliance, while it can be followed.
+    factored: Option<Factored>,
 }
 
 impl SurfaceContactScratch {
+    /// Whether the sphere (`centre`, `radius`) is near enough to the last solve's for its
+    /// contact to be followed ([`FOLLOW_M`]).
+    fn follows(&self, centre: [f64; 3], radius: f64) -> bool {
+        let Some(f) = &self.factored else { return false };
+        f.radius == radius && DVec3::from(centre).distance(DVec3::from(f.centre)) <= FOLLOW_M
+    }
+
     /// No contact, and no warm start for the next press.
     pub fn clear(&mut self) {
-        let c = &mut self.contact;
-        c.candidates.clear();
-        c.active.clear();
-        c.lambda.clear();
+        self.contact.clear();
+        self.factored = None;
         self.nodes.clear();
         self.points.clear();
         self.sources.clear();
@@ -475,6 +547,8 @@ impl Default for SurfaceContactScratch {
             points: Vec::with_capacity(m),
             sources: Vec::with_capacity(m),
             previous: Vec::with_capacity(m),
+            window: Vec::with_capacity(m),
+            factored: None,
         }
     }
 }
