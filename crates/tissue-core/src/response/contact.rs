@@ -245,57 +245,21 @@ pub fn resolve(s: &mut ContactScratch, tol: f64, change: &[[f64; 3]; 3]) -> bool
         return s.candidates.iter().all(|&(_, gap)| gap <= 0.0);
     }
     s.lambda.extend(s.active.iter().map(|&q| s.candidates[q].1));
-    let factor = MatRef::from_column_major_slice(&s.matrix[..m * m], m, m);
-    let solve = |b: &mut [f64], cols: usize, stack: &mut MemBuffer| {
-        llt::solve::solve_in_place_with_conj(
-            factor,
-            Conj::No,
-            MatMut::from_column_major_slice_mut(b, m, cols),
-            Par::Seq,
-            MemStack::new(stack),
-        );
-    };
-    solve(&mut s.lambda[..m], 1, &mut s.stack);
+    llt::solve::solve_in_place_with_conj(
+        MatRef::from_column_major_slice(&s.matrix[..m * m], m, m),
+        Conj::No,
+        MatMut::from_column_major_slice_mut(&mut s.lambda[..m], m, 1),
+        Par::Seq,
+        MemStack::new(&mut s.stack),
+    );
     let dot = |a: [f64; 3], d: &[[f64; 3]; 3], b: [f64; 3]| -> f64 {
         (0..3).map(|i| a[i] * (d[i][0] * b[0] + d[i][1] * b[1] + d[i][2] * b[2])).sum()
     };
     let changed = change.iter().flatten().any(|&v| v != 0.0);
-    if changed {
-        // (S - U D U^T)^-1 g = x + Y (I - D U^T Y)^-1 D U^T x, with x = S^-1 g, Y = S^-1 U and
-        // U the contacts' normals as rows.
-        s.along.clear();
-        for c in 0..3 {
-            s.along.extend(s.active.iter().map(|&q| s.candidates[q].0[c]));
-        }
-        solve(&mut s.along[..3 * m], 3, &mut s.stack);
-        let mut ut_y = [[0.0; 3]; 3];
-        let mut ut_x = [0.0; 3];
-        for (a, &q) in s.active.iter().enumerate() {
-            let n = s.candidates[q].0;
-            for i in 0..3 {
-                ut_x[i] += n[i] * s.lambda[a];
-                for (j, u) in ut_y[i].iter_mut().enumerate() {
-                    *u += n[i] * s.along[j * m + a];
-                }
-            }
-        }
-        // I - D U^T Y and D U^T x.
-        let mut k = [[0.0; 3]; 3];
-        let mut rhs = [0.0; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                k[i][j] = f64::from(u8::from(i == j)) - (0..3).map(|l| change[i][l] * ut_y[l][j]).sum::<f64>();
-            }
-            rhs[i] = (0..3).map(|l| change[i][l] * ut_x[l]).sum();
-        }
-        let Some(w) = solve3(k, rhs) else {
-            s.lambda.clear();
-            s.settled = false;
-            return false;
-        };
-        for a in 0..m {
-            s.lambda[a] += (0..3).map(|j| s.along[j * m + a] * w[j]).sum::<f64>();
-        }
+    if changed && !woodbury(s, change) {
+        s.lambda.clear();
+        s.settled = false;
+        return false;
     }
     // The contact's net normal push, for the change's part of the check.
     let mut net = [0.0; 3];
@@ -337,6 +301,50 @@ pub fn resolve(s: &mut ContactScratch, tol: f64, change: &[[f64; 3]; 3]) -> bool
         s.settled = false;
     }
     holds
+}
+
+/// The forces `s.lambda` (solved on the kept factorisation `S`) turned into those of `S - U D
+/// U^T`, `D` the `change` and `U` the contacts' normals as rows, by the Woodbury identity: `(S -
+/// U D U^T)^-1 g = x + Y (I - D U^T Y)^-1 D U^T x` with `x = S^-1 g` and `Y = S^-1 U` (three more
+/// solves). `false` where `I - D U^T Y` is singular.
+fn woodbury(s: &mut ContactScratch, change: &[[f64; 3]; 3]) -> bool {
+    let m = s.active.len();
+    s.along.clear();
+    for c in 0..3 {
+        s.along.extend(s.active.iter().map(|&q| s.candidates[q].0[c]));
+    }
+    llt::solve::solve_in_place_with_conj(
+        MatRef::from_column_major_slice(&s.matrix[..m * m], m, m),
+        Conj::No,
+        MatMut::from_column_major_slice_mut(&mut s.along[..3 * m], m, 3),
+        Par::Seq,
+        MemStack::new(&mut s.stack),
+    );
+    let mut ut_y = [[0.0; 3]; 3];
+    let mut ut_x = [0.0; 3];
+    for (a, &q) in s.active.iter().enumerate() {
+        let n = s.candidates[q].0;
+        for i in 0..3 {
+            ut_x[i] += n[i] * s.lambda[a];
+            for (j, u) in ut_y[i].iter_mut().enumerate() {
+                *u += n[i] * s.along[j * m + a];
+            }
+        }
+    }
+    // I - D U^T Y and D U^T x.
+    let mut k = [[0.0; 3]; 3];
+    let mut rhs = [0.0; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            k[i][j] = f64::from(u8::from(i == j)) - (0..3).map(|l| change[i][l] * ut_y[l][j]).sum::<f64>();
+        }
+        rhs[i] = (0..3).map(|l| change[i][l] * ut_x[l]).sum();
+    }
+    let Some(w) = solve3(k, rhs) else { return false };
+    for a in 0..m {
+        s.lambda[a] += (0..3).map(|j| s.along[j * m + a] * w[j]).sum::<f64>();
+    }
+    true
 }
 
 /// The solution of the 3 x 3 system `k x = b` (Cramer's rule), or `None` where `k` is singular.

@@ -42,6 +42,9 @@ pub fn run(options: ViewOptions) -> anyhow::Result<()> {
     if !display_available() {
         anyhow::bail!("no display (DISPLAY and WAYLAND_DISPLAY are unset), so the viewer cannot open; {HEADLESS_HINT}");
     }
+    // A material's surface compliance is computed on one core: the physics and the drawing keep
+    // the others.
+    crate::sim::material_surface::set_compute_threads(1);
     viewer::run(options)
 }
 

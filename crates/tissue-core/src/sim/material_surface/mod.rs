@@ -22,6 +22,7 @@ pub mod modal_lag;
 
 use std::path::Path;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;
 
@@ -338,22 +339,72 @@ fn load_or_compute_correction(
     )
 }
 
-/// [`load_or_compute`] for a material without inclusions.
+/// How many threads compute a surface compliance (a family of faces each, at most three): every
+/// core unless set ([`set_compute_threads`]).
+static COMPUTE_THREADS: AtomicUsize = AtomicUsize::new(0);
+
+/// Computes surface compliances on `threads` threads from now on (the viewer takes one, so that
+/// its physics and drawing keep theirs).
+pub fn set_compute_threads(threads: usize) {
+    COMPUTE_THREADS.store(threads.max(1), Ordering::Relaxed);
+}
+
+fn compute_threads() -> usize {
+    match COMPUTE_THREADS.load(Ordering::Relaxed) {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()).min(3),
+        n => n,
+    }
+}
+
+/// The part file of family `family` of `material`'s compliance in a cache folder: a family's
+/// columns kept while the others are computed, so that an interrupted computation resumes.
+fn part_name(material: &Material, family: usize) -> String {
+    file_name(material).replace(".bin", &format!(".part{family}.bin"))
+}
+
+/// [`load_or_compute`] for a material without inclusions. While it is computed, each family of
+/// faces is kept in a part file as it ends, and a later computation takes the parts back; they
+/// are removed once the whole file is kept.
 fn load_or_compute_background(
     material: &Material,
     dir: Option<&Path>,
     report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
 ) -> anyhow::Result<Arc<SurfaceCompliance>> {
+    use compliance::file::{part_from_bytes, part_to_bytes};
+    let part = |d: &Path, f: usize| KeptFile::new(d, &part_name(material, f), "a part of the surface compliance");
     let computed = kept_or_computed(
         dir.map(|d| KeptFile::new(d, &file_name(material), KEPT)),
         report,
         |bytes| SurfaceCompliance::from_bytes(bytes, material, DEFAULT_DIVISIONS),
         |kept_in, report| {
             report(CacheEvent::Computing { kept_in });
-            Ok(SurfaceCompliance::compute(material, DEFAULT_DIVISIONS, &mut |f| report(CacheEvent::Progress(f)))?)
+            Ok(SurfaceCompliance::compute_kept(
+                material,
+                DEFAULT_DIVISIONS,
+                compute_threads(),
+                // A part that cannot be read or is not this material's is computed again.
+                &mut |f, len| {
+                    let bytes = part(kept_in?, f).read(MAX_FILE_BYTES).ok()??;
+                    part_from_bytes(&bytes, material, DEFAULT_DIVISIONS, f, len).ok()
+                },
+                // A part that cannot be kept is only work that a later start repeats.
+                &mut |f, values| {
+                    if let Some(d) = kept_in {
+                        let _ = part(d, f).write(&part_to_bytes(material, DEFAULT_DIVISIONS, f, values));
+                    }
+                },
+                &mut |f| report(CacheEvent::Progress(f)),
+            )?)
         },
         |computed| computed.to_bytes(material),
     )?;
+    if let Some(d) = dir
+        && KeptFile::new(d, &file_name(material), KEPT).path().is_file()
+    {
+        for f in 0..3 {
+            let _ = std::fs::remove_file(part(d, f).path());
+        }
+    }
     Ok(Arc::new(computed))
 }
 

@@ -77,7 +77,7 @@ impl ViewerState {
         let wake = Arc::clone(&self.wake);
         self.shown.contact_status = Some("probe contact: the material's surface compliance is loading".into());
         self.shown.material_contact_in = Some("the material's: loading".into());
-        self.compliance_since = std::time::Instant::now();
+        self.compliance_since = (std::time::Instant::now(), None);
         let started = self.compliance.start(
             "surface compliance",
             move || wake(),
@@ -140,10 +140,11 @@ impl ViewerState {
             _ if stale => {}
             ComplianceMessage::Stage(what) => {
                 *stage = what;
-                *since = std::time::Instant::now();
+                *since = (std::time::Instant::now(), None);
             }
             ComplianceMessage::Progress(f) => {
-                let left = time_left(since.elapsed().as_secs_f64(), f);
+                let first = *since.1.get_or_insert(f);
+                let left = time_left(since.0.elapsed().as_secs_f64(), first, f);
                 let eta = left.as_ref().map_or(String::new(), |s| format!(", about {s} left"));
                 shown.contact_status = Some(format!(
                     "probe contact: computing {stage}, {:.0} %{eta} (meanwhile the model's nodes push back)",
@@ -358,12 +359,13 @@ impl ViewerState {
     }
 }
 
-/// The time left of a job `f` done (0 to 1) after `elapsed_s` seconds, as a person reads it
-/// (`12 s`, `2 min`), at its rate so far; `None` before 2 % (no rate to tell yet).
-fn time_left(elapsed_s: f64, f: f64) -> Option<String> {
-    if !(0.02..1.0).contains(&f) {
+/// The time left of a job `f` done (0 to 1) after `elapsed_s` seconds since it stood at `first`,
+/// as a person reads it (`12 s`, `2 min`), at its rate since; `None` before it moved 2 % (no rate
+/// to tell yet).
+fn time_left(elapsed_s: f64, first: f64, f: f64) -> Option<String> {
+    if f - first < 0.02 || f >= 1.0 {
         return None;
     }
-    let left = elapsed_s * (1.0 - f) / f;
+    let left = elapsed_s * (1.0 - f) / (f - first);
     Some(if left < 90.0 { format!("{:.0} s", left.max(1.0)) } else { format!("{:.0} min", left / 60.0) })
 }

@@ -101,9 +101,10 @@ pub struct ViewerState {
     /// The material changed while a surface compliance was computed: its result is dropped and
     /// the new material's started when it ends.
     compliance_stale: bool,
-    /// When the surface compliance job started what it computes now (its estimate of the time
-    /// left is read from here).
-    compliance_since: std::time::Instant,
+    /// When the surface compliance job started what it computes now and the fraction it first
+    /// reported (a resumed computation starts past 0): its estimate of the time left is the rate
+    /// since.
+    compliance_since: (std::time::Instant, Option<f64>),
     /// What the surface compliance job computes now.
     compliance_stage: String,
     /// The felt material's surface compliance and its background's, once loaded.
@@ -186,7 +187,7 @@ impl ViewerState {
             fem_probe: Slot::default(),
             compliance: Slot::default(),
             compliance_stale: false,
-            compliance_since: std::time::Instant::now(),
+            compliance_since: (std::time::Instant::now(), None),
             compliance_stage: String::new(),
             compliances: None,
             deferred_press: None,

@@ -87,74 +87,122 @@ fn u32_at(bytes: &[u8], at: usize) -> u32 {
     u32::from_le_bytes(array(bytes, at))
 }
 
+/// The bytes of a file of this layout: `magic`, the key of `material` and `divisions`, the
+/// count of `values`, then `extra` (a part file's family) and the values.
+fn seal(magic: &[u8; 8], divisions: usize, material: &Material, extra: &[u8], values: &[f32]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(HEADER_BYTES + extra.len() + 4 * values.len());
+    out.extend_from_slice(magic);
+    out.extend_from_slice(&FILE_FORMAT.to_le_bytes());
+    out.extend_from_slice(&[0; 4]);
+    out.extend_from_slice(&METHOD_VERSION.to_le_bytes());
+    out.extend_from_slice(&(divisions as u32).to_le_bytes());
+    for c in stiffness_rows(material) {
+        out.extend_from_slice(&c.to_le_bytes());
+    }
+    out.extend_from_slice(&(values.len() as u64).to_le_bytes());
+    debug_assert_eq!(out.len(), HEADER_BYTES);
+    out.extend_from_slice(extra);
+    for v in values {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    let crc = crc32fast::hash(&out[CHECKED_FROM..]);
+    out[CHECKSUM_AT..CHECKED_FROM].copy_from_slice(&crc.to_le_bytes());
+    out
+}
+
+/// Reads [`seal`]'s bytes with `extra` bytes after the header: those bytes and the values, or why
+/// they are not `material`'s for `divisions` (checked in this order: the format, the length, the
+/// checksum, the key, finite values).
+fn open<'b>(
+    bytes: &'b [u8],
+    magic: &[u8; 8],
+    extra: usize,
+    material: &Material,
+    divisions: usize,
+) -> Result<(&'b [u8], Vec<f32>), FileError> {
+    let header = HEADER_BYTES + extra;
+    if bytes.len() < header {
+        let cut = bytes.starts_with(magic) || magic.starts_with(bytes);
+        return Err(if cut { FileError::Truncated } else { FileError::Format });
+    }
+    if bytes[..magic.len()] != *magic || u32_at(bytes, 8) != FILE_FORMAT {
+        return Err(FileError::Format);
+    }
+    let count = u64::from_le_bytes(array(bytes, COUNT_AT));
+    let expected = u128::from(count) * 4 + header as u128;
+    match (bytes.len() as u128).cmp(&expected) {
+        std::cmp::Ordering::Less => return Err(FileError::Truncated),
+        std::cmp::Ordering::Greater => return Err(FileError::TooLong),
+        std::cmp::Ordering::Equal => {}
+    }
+    if crc32fast::hash(&bytes[CHECKED_FROM..]) != u32_at(bytes, CHECKSUM_AT) {
+        return Err(FileError::Checksum);
+    }
+    if u32_at(bytes, 16) != METHOD_VERSION {
+        return Err(FileError::Method);
+    }
+    if u32_at(bytes, 20) as usize != divisions {
+        return Err(FileError::Grid);
+    }
+    let same = stiffness_rows(material)
+        .iter()
+        .enumerate()
+        .all(|(k, c)| u64::from_le_bytes(array(bytes, STIFFNESS_AT + 8 * k)) == c.to_bits());
+    if !same {
+        return Err(FileError::Material);
+    }
+    if !divisions.is_multiple_of(2) || divisions < 2 {
+        return Err(FileError::Inconsistent);
+    }
+    let values: Vec<f32> =
+        bytes[header..].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(FileError::NotFinite);
+    }
+    Ok((&bytes[HEADER_BYTES..header], values))
+}
+
+/// The first bytes of a part file: one family's columns, kept while the others are computed.
+pub const PART_MAGIC: [u8; 8] = *b"TSIMSCPT";
+
+/// Family `family`'s columns (`values`) of `material`'s compliance on `divisions` as the bytes of
+/// a part file: the whole file's layout with [`PART_MAGIC`] and the family's index (u32) after the
+/// header.
+pub fn part_to_bytes(material: &Material, divisions: usize, family: usize, values: &[f32]) -> Vec<u8> {
+    seal(&PART_MAGIC, divisions, material, &(family as u32).to_le_bytes(), values)
+}
+
+/// Reads [`part_to_bytes`]: family `family`'s columns of `material`'s compliance on `divisions`,
+/// `len` values, or why `bytes` are not them.
+pub fn part_from_bytes(
+    bytes: &[u8],
+    material: &Material,
+    divisions: usize,
+    family: usize,
+    len: usize,
+) -> Result<Vec<f32>, FileError> {
+    let (extra, values) = open(bytes, &PART_MAGIC, 4, material, divisions)?;
+    if u32_at(extra, 0) as usize != family || values.len() != len {
+        return Err(FileError::Inconsistent);
+    }
+    Ok(values)
+}
+
 impl SurfaceCompliance {
     /// The compliance as the bytes of its file ([`crate::sim::material_surface::compliance::file`]'s
     /// layout), keyed by `material`, the material it was computed for.
     pub fn to_bytes(&self, material: &Material) -> Vec<u8> {
-        let mut out = Vec::with_capacity(HEADER_BYTES + 4 * self.columns.len());
-        out.extend_from_slice(&FILE_MAGIC);
-        out.extend_from_slice(&FILE_FORMAT.to_le_bytes());
-        out.extend_from_slice(&[0; 4]);
-        out.extend_from_slice(&METHOD_VERSION.to_le_bytes());
-        out.extend_from_slice(&(self.lattice.divisions as u32).to_le_bytes());
-        for c in stiffness_rows(material) {
-            out.extend_from_slice(&c.to_le_bytes());
-        }
-        out.extend_from_slice(&(self.columns.len() as u64).to_le_bytes());
-        debug_assert_eq!(out.len(), HEADER_BYTES);
-        for v in self.columns.iter() {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-        let crc = crc32fast::hash(&out[CHECKED_FROM..]);
-        out[CHECKSUM_AT..CHECKED_FROM].copy_from_slice(&crc.to_le_bytes());
-        out
+        seal(&FILE_MAGIC, self.lattice.divisions, material, &[], &self.columns)
     }
 
     /// Reads [`SurfaceCompliance::to_bytes`]: the compliance of `material` with `divisions` face
     /// divisions per axis, or why `bytes` are not it (checked in this order: the format, the
     /// length, the checksum, the key).
     pub fn from_bytes(bytes: &[u8], material: &Material, divisions: usize) -> Result<Self, FileError> {
-        if bytes.len() < HEADER_BYTES {
-            let cut = bytes.starts_with(&FILE_MAGIC) || FILE_MAGIC.starts_with(bytes);
-            return Err(if cut { FileError::Truncated } else { FileError::Format });
-        }
-        if bytes[..FILE_MAGIC.len()] != FILE_MAGIC || u32_at(bytes, 8) != FILE_FORMAT {
-            return Err(FileError::Format);
-        }
-        let count = u64::from_le_bytes(array(bytes, COUNT_AT));
-        let expected = u128::from(count) * 4 + HEADER_BYTES as u128;
-        match (bytes.len() as u128).cmp(&expected) {
-            std::cmp::Ordering::Less => return Err(FileError::Truncated),
-            std::cmp::Ordering::Greater => return Err(FileError::TooLong),
-            std::cmp::Ordering::Equal => {}
-        }
-        if crc32fast::hash(&bytes[CHECKED_FROM..]) != u32_at(bytes, CHECKSUM_AT) {
-            return Err(FileError::Checksum);
-        }
-        if u32_at(bytes, 16) != METHOD_VERSION {
-            return Err(FileError::Method);
-        }
-        if u32_at(bytes, 20) as usize != divisions {
-            return Err(FileError::Grid);
-        }
-        let same = stiffness_rows(material)
-            .iter()
-            .enumerate()
-            .all(|(k, c)| u64::from_le_bytes(array(bytes, STIFFNESS_AT + 8 * k)) == c.to_bits());
-        if !same {
-            return Err(FileError::Material);
-        }
-        if !divisions.is_multiple_of(2) || divisions < 2 {
-            return Err(FileError::Inconsistent);
-        }
+        let (_, columns) = open(bytes, &FILE_MAGIC, 0, material, divisions)?;
         let lattice = super::lattice::Lattice::new(divisions);
-        if count != lattice.values as u64 {
+        if columns.len() != lattice.values {
             return Err(FileError::Inconsistent);
-        }
-        let columns: Vec<f32> =
-            bytes[HEADER_BYTES..].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
-        if columns.iter().any(|v| !v.is_finite()) {
-            return Err(FileError::NotFinite);
         }
         Ok(Self { lattice, columns: columns.into(), correction: None })
     }

@@ -18,11 +18,12 @@ use glam::DVec3;
 
 use crate::response::contact;
 
-use crate::mechanics::fem::graded::{GradedFem, GradedMesh, graded_axis};
+use crate::mechanics::fem::graded::{GradedMesh, graded_axis};
 use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::mechanics::material::Material;
 use crate::mechanics::sparse::SparseError;
 
+pub mod compute;
 pub mod file;
 pub mod lattice;
 pub mod inclusion;
@@ -147,67 +148,6 @@ impl SurfaceCompliance {
     /// The inclusions' correction, where the material has inclusions.
     pub fn correction(&self) -> Option<&InclusionCorrection> {
         self.correction.as_ref()
-    }
-
-    /// Computes the compliance of `material` with `divisions` divisions per axis (even);
-    /// `progress(fraction)` is called between batches (about a second apart) and stops the work
-    /// when it returns `false`.
-    pub fn compute(
-        material: &Material,
-        divisions: usize,
-        progress: &mut dyn FnMut(f64) -> bool,
-    ) -> Result<Self, ComplianceError> {
-        material.require_homogeneous("the surface compliance")?;
-        let c = &material.stiffness;
-        let coupled = (0..3).any(|i| (3..6).any(|j| c[(i, j)] != 0.0))
-            || c[(3, 4)] != 0.0
-            || c[(3, 5)] != 0.0
-            || c[(4, 5)] != 0.0;
-        if coupled || !divisions.is_multiple_of(2) || divisions < 2 {
-            return Err(ComplianceError::NotOrthotropic);
-        }
-        let lattice = Lattice::new(divisions);
-        let total: usize = lattice.families.iter().map(lattice::Family::columns).sum();
-        let mut columns = vec![0.0f32; lattice.values];
-        let mut done = 0;
-        for f in &lattice.families {
-            if !progress(done as f64 / total as f64) {
-                return Err(ComplianceError::Cancelled);
-            }
-            let mut fem = GradedFem::clamped_bottom(family_mesh(f.axis, &lattice.coords, divisions), material)?;
-            // Each target as the mesh's two nodes across the graded axis and the weight of the second.
-            let at: Vec<(usize, usize, f64)> =
-                f.targets.iter().map(|&q| mesh_point(&fem.mesh, f.axis, q, &lattice.coords)).collect();
-            let n = fem.fixed.len();
-            let nodes: Vec<usize> = (0..f.columns()).collect();
-            for batch in nodes.chunks(BATCH_NODES) {
-                let cols = 3 * batch.len();
-                let mut rhs = vec![0.0; n * cols];
-                for (b, &k) in batch.iter().enumerate() {
-                    let (p, _, _) = mesh_point(&fem.mesh, f.axis, f.column_point(k, lattice.last()), &lattice.coords);
-                    for c in 0..3 {
-                        rhs[(3 * b + c) * n + 3 * p + c] = 1.0;
-                    }
-                }
-                fem.solve_columns(&mut rhs, cols)?;
-                for (b, &k) in batch.iter().enumerate() {
-                    let start = f.offset + k * 9 * at.len();
-                    for (block, &(lo, hi, w)) in columns[start..start + 9 * at.len()].chunks_exact_mut(9).zip(&at) {
-                        for c in 0..3 {
-                            let col = &rhs[(3 * b + c) * n..(3 * b + c + 1) * n];
-                            for a in 0..3 {
-                                block[3 * c + a] = ((1.0 - w) * col[3 * lo + a] + w * col[3 * hi + a]) as f32;
-                            }
-                        }
-                    }
-                }
-                done += batch.len();
-                if !progress(done as f64 / total as f64) {
-                    return Err(ComplianceError::Cancelled);
-                }
-            }
-        }
-        Ok(Self { lattice, columns: columns.into(), correction: None })
     }
 
     /// Rest position of surface node `q`, metres.
