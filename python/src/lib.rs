@@ -203,20 +203,23 @@ impl Simulation {
 /// as JSON (the command's file).
 #[pyfunction]
 #[allow(clippy::too_many_arguments, reason = "Python's keyword arguments, one per calibrate flag")]
-#[pyo3(signature = (material, model = "axis", method = "hybrid", seed = 1, population = 50, generations = 100, cases = "paper", nodes = 8))]
+#[pyo3(signature = (material, model = "axis", method = "hybrid", seed = 1, population = None, generations = None, cases = "paper", nodes = 8))]
 fn calibrate(
     py: Python<'_>,
     material: &Material,
     model: &str,
     method: &str,
     seed: u64,
-    population: usize,
-    generations: usize,
+    population: Option<usize>,
+    generations: Option<usize>,
     cases: &str,
     nodes: usize,
 ) -> PyResult<String> {
     use tissue_studies::calibrate::{GeneSpace, Problem, Settings, calibrate};
     let topology: core::Topology = named("model", model)?;
+    // The command's defaults: the search the polish finishes, or the paper's.
+    let (p, g) = Settings::default_search(topology, tissue_studies::calibrate::CostMode::Static);
+    let (population, generations) = (population.unwrap_or(p), generations.unwrap_or(g));
     let settings = Settings { method: named("method", method)?, seed, population, generations, ..Settings::default() };
     settings.validate().map_err(PyValueError::new_err)?;
     let grid = Grid::new(nodes).map_err(|e| PyValueError::new_err(e.to_string()))?;

@@ -23,12 +23,14 @@ pub struct CalibrateArgs {
     /// Random seed (same seed and settings: same result).
     #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
     pub seed: u64,
-    /// Population size.
-    #[arg(long, default_value_t = 50, allow_hyphen_values = true)]
-    pub population: usize,
-    /// Generations (temperature steps for SA).
-    #[arg(long, default_value_t = 100, allow_hyphen_values = true)]
-    pub generations: usize,
+    /// Population size [default: 10 for the shear and hex lattices' static cost, which the
+    /// gradient polish finishes at the same optimum; the paper's 50 otherwise].
+    #[arg(long, allow_hyphen_values = true)]
+    pub population: Option<usize>,
+    /// Generations (temperature steps for SA) [default: 10 for the shear and hex lattices' static
+    /// cost; the paper's 100 otherwise].
+    #[arg(long, allow_hyphen_values = true)]
+    pub generations: Option<usize>,
     /// Mutation probability per chromosome.
     #[arg(long, default_value_t = 0.2, allow_hyphen_values = true)]
     pub mutation: f64,
@@ -76,6 +78,9 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
     crate::io::check_output(&out)?;
     let material = object.material(None)?;
     let grid = grid.grid()?;
+    let (default_population, default_generations) = Settings::default_search(model, cost);
+    let (population, generations) =
+        (population.unwrap_or(default_population), generations.unwrap_or(default_generations));
     let settings = Settings { method, seed, population, generations, mutation, crossover, cost, ..Settings::default() };
     settings.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let mut space = GeneSpace::new(&material, &grid, model);

@@ -134,7 +134,22 @@ impl Default for Settings {
     }
 }
 
+/// The paper's search: 50 individuals, 100 generations (temperature steps for SA).
+pub const PAPER_SEARCH: (usize, usize) = (50, 100);
+
+/// The search where the gradient polish follows it (the static cost of the shear and hex
+/// lattices): 10 individuals, 10 generations. The polish takes it to the optimum the paper's
+/// search reaches (the same cost to 1e-12, docs/calibration.md, Speed) in a quarter of the time.
+pub const POLISHED_SEARCH: (usize, usize) = (10, 10);
+
 impl Settings {
+    /// The default search (population, generations) for `topology` under `cost`:
+    /// [`POLISHED_SEARCH`] where the polish runs after it, else the paper's [`PAPER_SEARCH`] (the
+    /// axis lattice, whose cost is closed-form, and the transient cost, which has no polish).
+    pub fn default_search(topology: Topology, cost: CostMode) -> (usize, usize) {
+        if cost == CostMode::Static && topology != Topology::Axis { POLISHED_SEARCH } else { PAPER_SEARCH }
+    }
+
     /// Checks ranges, naming the setting at fault.
     pub fn validate(&self) -> Result<(), String> {
         if self.population < 2 || self.population > 100_000 {
