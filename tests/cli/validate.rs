@@ -38,7 +38,11 @@ fn validate_prints_the_touch_benchmark_contract() {
         let id = c["id"].as_str().unwrap_or("");
         let error = c["error"].as_f64().unwrap_or(1.0);
         assert!(error.abs() < 0.07, "{id}: {error}");
+        // Against the own FEM only where it feels something: `null` (printed n/a), not 0.
+        let own = c["own_mesh_fem_force_n"].as_f64().expect("own FEM force");
+        assert_eq!(c["own_mesh_error"].is_null(), own <= 0.0, "{id}: {}", c["own_mesh_error"]);
     }
+    assert!(material["worst_training_error"].as_f64().is_some(), "B has training presses");
     let modes = v["modes_hz"].as_array().expect("modes");
     assert_eq!(modes.len(), 6);
     assert!(modes.windows(2).all(|w| w[0].as_f64() <= w[1].as_f64()), "modes not ascending");

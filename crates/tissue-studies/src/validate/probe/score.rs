@@ -26,8 +26,8 @@ pub struct PressScore {
     pub own_mesh_fem_force_n: f64,
     /// `force_n / material_force_n - 1`.
     pub error: f64,
-    /// `force_n / own_mesh_fem_force_n - 1` (0 when the FEM feels nothing).
-    pub own_mesh_error: f64,
+    /// `force_n / own_mesh_fem_force_n - 1`; none (`null`) where the FEM feels nothing.
+    pub own_mesh_error: Option<f64>,
 }
 
 /// The scores against the material.
@@ -46,8 +46,8 @@ pub struct MaterialReport {
     pub worst_error: f64,
     /// Median `|error|` over the validation presses.
     pub median_error: f64,
-    /// Largest `|error|` over the training presses.
-    pub worst_training_error: f64,
+    /// Largest `|error|` over the training presses; none (`null`) without training presses.
+    pub worst_training_error: Option<f64>,
     /// Largest `|own_mesh_fem_force_n / material_force_n - 1|` over the validation presses.
     pub own_mesh_fem_worst_error: f64,
     /// Presses over inclusions whose continuum answer could not be computed (within its memory
@@ -114,7 +114,7 @@ pub fn evaluate(
             material_force_n: m,
             own_mesh_fem_force_n: own,
             error: force_n / m - 1.0,
-            own_mesh_error: if own > 0.0 { force_n / own - 1.0 } else { 0.0 },
+            own_mesh_error: (own > 0.0).then(|| force_n / own - 1.0),
         });
     }
     cache.save();
@@ -137,7 +137,7 @@ pub fn evaluate(
         tolerance,
         worst_error: validation.last().copied().unwrap_or(0.0),
         median_error,
-        worst_training_error: of(Set::Training, &|c| c.error.abs()).last().copied().unwrap_or(0.0),
+        worst_training_error: of(Set::Training, &|c| c.error.abs()).last().copied(),
         own_mesh_fem_worst_error: of(Set::Validation, &|c| (c.own_mesh_fem_force_n / c.material_force_n - 1.0).abs())
             .last()
             .copied()
@@ -189,6 +189,11 @@ pub fn training_forces(material: &Material) -> anyhow::Result<Vec<(Press, f64)>>
     Ok(out)
 }
 
+/// A relative error as a percentage column, `n/a` where it is not defined (the reference is 0).
+fn percent(e: Option<f64>) -> String {
+    e.map_or_else(|| "n/a".to_owned(), |e| format!("{:.1}%", 100.0 * e))
+}
+
 impl MaterialReport {
     /// The table `validate` prints.
     pub fn to_text(&self) -> String {
@@ -208,22 +213,23 @@ impl MaterialReport {
         );
         for c in &self.cases {
             s += &format!(
-                "{:<34} {:<10} {:>8.3} {:>9.3} {:>9.3} {:>7.1}% {:>8.1}%\n",
+                "{:<34} {:<10} {:>8.3} {:>9.3} {:>9.3} {:>7.1}% {:>9}\n",
                 c.id,
                 format!("{:?}", c.set).to_lowercase(),
                 c.force_n,
                 c.material_force_n,
                 c.own_mesh_fem_force_n,
                 100.0 * c.error,
-                100.0 * c.own_mesh_error
+                percent(c.own_mesh_error)
             );
         }
         s += &format!(
-            "validation presses against the material: worst {:.1} %, median {:.1} % (training worst {:.1} %); \
+            "validation presses against the material: worst {:.1} %, median {:.1} % (training worst {}); \
              the same-mesh FEM: worst {:.1} %\n",
             100.0 * self.worst_error,
             100.0 * self.median_error,
-            100.0 * self.worst_training_error,
+            self.worst_training_error
+                .map_or_else(|| "n/a: no training presses".to_owned(), |e| format!("{:.1} %", 100.0 * e)),
             100.0 * self.own_mesh_fem_worst_error
         );
         for m in &self.missing {
