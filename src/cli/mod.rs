@@ -9,7 +9,7 @@
 //! here.
 //!
 //! Subcommands: [`fem`], [`msm`], [`errors`], [`validate`], [`calibrate`], [`reproduce`],
-//! [`dynamics`], [`chart`], [`choose`], [`mod@bench`], [`render`], [`simulate`], [`view`], [`palpate`].
+//! [`dynamics`], [`chart`], [`choose`], [`mod@bench`], [`render`], [`simulate`], [`view`], [`palpate`], [`compliance`].
 
 use std::process::ExitCode;
 
@@ -20,6 +20,7 @@ pub mod bench;
 pub mod calibrate;
 pub mod chart;
 pub mod choose;
+pub mod compliance;
 pub mod dynamics;
 pub mod errors;
 pub mod fem;
@@ -80,6 +81,9 @@ pub enum Command {
     Dynamics(dynamics::DynamicsArgs),
     /// Speed benchmark of the physics core (release build).
     Bench(bench::BenchArgs),
+    /// A material's surface compliance (how its free surface gives under the probe) computed and
+    /// written in its compact form, the form assets/compliance ships for objects A and B.
+    Compliance(compliance::ComplianceArgs),
     /// A palpation map: the probe pressed at a grid of points over one face, the material's force
     /// (its inclusions felt) against its background's (map.json, map.csv, map.png in DIR).
     Palpate(palpate::PalpateArgs),
@@ -133,5 +137,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Palpate(args) => palpate::run(args),
         Command::Dynamics(args) => dynamics::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Compliance(args) => compliance::run(args),
     }
 }

@@ -112,6 +112,17 @@ pub fn shipped(material: &Material, topology: Topology) -> anyhow::Result<Shippe
     serde_json::from_str(text).context("assets: invalid tissue file")
 }
 
+/// The compact surface compliance shipped for preset object `name` (A or B) in
+/// `assets/compliance/` (`tissue-sim compliance --object NAME --out assets/compliance/NAME.bin`
+/// wrote it), or `None` for another name.
+pub fn compact_compliance(name: &str) -> Option<&'static [u8]> {
+    match name {
+        "A" => Some(include_bytes!("../../../../assets/compliance/A.bin")),
+        "B" => Some(include_bytes!("../../../../assets/compliance/B.bin")),
+        _ => None,
+    }
+}
+
 /// The shipped 8^3 parameters carried to `grid` by their stiffness scale: `k ~ E L^2 / (n^2 h)`
 /// per chain for the axis and shear lattices, `k ~ E h` per element for the hex lattice; the
 /// nodal damping `d` with the node mass.

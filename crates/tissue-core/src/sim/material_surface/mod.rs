@@ -362,10 +362,41 @@ fn part_name(material: &Material, family: usize) -> String {
     file_name(material).replace(".bin", &format!(".part{family}.bin"))
 }
 
-/// [`load_or_compute`] for a material without inclusions. While it is computed, each family of
+/// [`load_or_compute`] for a material without inclusions: the shipped compact form where it is a
+/// shipped object's ([`shipped`]), else [`computed`].
+fn load_or_compute_background(
+    material: &Material,
+    dir: Option<&Path>,
+    report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
+) -> anyhow::Result<Arc<SurfaceCompliance>> {
+    match shipped(material) {
+        Some(compliance) => Ok(compliance),
+        None => computed(material, dir, report),
+    }
+}
+
+/// The surface compliance shipped in `assets/compliance/` for `material` where its stiffness is a
+/// shipped object's to the bit (objects A and B; [`compliance::compact`]: every entry within
+/// 5e-4 of its column's largest), read once a process: nothing to compute.
+pub fn shipped(material: &Material) -> Option<Arc<SurfaceCompliance>> {
+    use std::sync::OnceLock;
+    static READ: [OnceLock<Option<Arc<SurfaceCompliance>>>; 2] = [OnceLock::new(), OnceLock::new()];
+    ["A", "B"].iter().zip(&READ).find_map(|(name, read)| {
+        let bytes = crate::sim::shipped::compact_compliance(name)?;
+        // Another material's is refused by its key before anything is read.
+        if !compliance::compact::is_for(bytes, material) {
+            return None;
+        }
+        read.get_or_init(|| SurfaceCompliance::from_compact(bytes, material, DEFAULT_DIVISIONS).ok().map(Arc::new))
+            .clone()
+    })
+}
+
+/// [`load_or_compute`] for a material without inclusions, never the shipped compact form: the
+/// compliance computed (or kept in `dir` from an earlier computation). While it is computed, each family of
 /// faces is kept in a part file as it ends, and a later computation takes the parts back; they
 /// are removed once the whole file is kept.
-fn load_or_compute_background(
+pub fn computed(
     material: &Material,
     dir: Option<&Path>,
     report: &mut dyn FnMut(CacheEvent<'_>) -> bool,
@@ -448,4 +479,25 @@ fn kept_or_computed<T>(
         report(CacheEvent::Warning(&line));
     }
     Ok(computed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The compliances shipped for objects A and B are read for them (their key, this method's
+    /// version and grid: a stale file fails here; `tissue-sim compliance` writes it again), for no
+    /// other material, and give the probe's force on the top face.
+    #[test]
+    fn objects_a_and_b_have_their_compliance_shipped() {
+        for material in [Material::object_a(), Material::object_b()] {
+            let compliance = shipped(&material).expect("shipped and of this version");
+            let mut scratch = SurfaceContactScratch::default();
+            let f = compliance.press([0.05, 0.05, 0.111], 0.015, &mut scratch).expect("a press");
+            assert!(f[2] > 3.0 && f[2] < 12.0, "{}: {f:?} N", material.name);
+        }
+        let mut other = Material::object_a();
+        other.stiffness *= 2.0;
+        assert!(shipped(&other).is_none());
+    }
 }

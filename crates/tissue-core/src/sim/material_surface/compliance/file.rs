@@ -74,16 +74,16 @@ pub enum FileError {
 }
 
 /// The key's stiffness: `C` row by row.
-fn stiffness_rows(material: &Material) -> [f64; 36] {
+pub(super) fn stiffness_rows(material: &Material) -> [f64; 36] {
     std::array::from_fn(|k| material.stiffness[(k / 6, k % 6)])
 }
 
 /// The `N` bytes at `at` (within the bytes checked to be there).
-fn array<const N: usize>(bytes: &[u8], at: usize) -> [u8; N] {
+pub(super) fn array<const N: usize>(bytes: &[u8], at: usize) -> [u8; N] {
     std::array::from_fn(|i| bytes[at + i])
 }
 
-fn u32_at(bytes: &[u8], at: usize) -> u32 {
+pub(super) fn u32_at(bytes: &[u8], at: usize) -> u32 {
     u32::from_le_bytes(array(bytes, at))
 }
 

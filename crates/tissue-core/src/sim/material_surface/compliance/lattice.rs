@@ -239,6 +239,13 @@ impl Lattice {
 }
 
 impl Family {
+    /// The target at lattice point `q` (every index at most `last`), if the family's columns hold it.
+    pub fn target_at(&self, q: [usize; 3], last: usize) -> Option<usize> {
+        let side = last + 1;
+        let t = *self.table.get(q[0] + side * (q[1] + side * q[2]))?;
+        (t != u32::MAX).then_some(t as usize)
+    }
+
     /// Columns' nodes solved.
     pub fn columns(&self) -> usize {
         self.solved[0].len() * self.solved[1].len()

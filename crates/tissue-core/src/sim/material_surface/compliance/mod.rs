@@ -23,6 +23,7 @@ use crate::mechanics::grid::CUBE_SIDE_M;
 use crate::mechanics::material::Material;
 use crate::mechanics::sparse::SparseError;
 
+pub mod compact;
 pub mod compute;
 pub mod file;
 pub mod lattice;
