@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates assets/screenshot.png, the picture in README.md: the viewer under Xvfb (software
 # Vulkan where there is no GPU) at its default window and camera, the 15 mm probe pressed 4 mm
-# into the centre of the top face, 300 frames, then the 3D view saved by `view --screenshot`.
+# into the centre of the top face, 300 frames, then the window as shown saved by `view --screenshot`.
 # Needs the packages .ci/run installs (xvfb, xauth, mesa-vulkan-drivers, ...).
 set -euo pipefail
 cd "$(dirname "$0")/.."

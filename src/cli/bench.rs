@@ -32,16 +32,34 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             &mut |e| said.event(e),
         )?;
         let report = crate::study::bench::gpu::measure(&gpu, &surface)?;
-        return if args.json { say(&serde_json::to_string_pretty(&report)?) } else { say_raw(&report.to_text()) };
+        if args.json {
+            say(&serde_json::to_string_pretty(&report)?)?
+        } else {
+            say_raw(&report.to_text())?
+        }
+        super::output::summary("bench", "the GPU step timed against the CPU (the report above)");
+        return Ok(());
     }
     if args.moving {
         let ticks = crate::study::bench::moving::run()?;
-        return if args.json {
-            say(&serde_json::to_string_pretty(&serde_json::json!({ "moving_probe_tick_s": ticks }))?)
+        if args.json {
+            say(&serde_json::to_string_pretty(&serde_json::json!({ "moving_probe_tick_s": ticks }))?)?;
         } else {
-            say_raw(&crate::study::bench::moving::to_text(&ticks))
-        };
+            say_raw(&crate::study::bench::moving::to_text(&ticks))?;
+        }
+        let worst = ticks.values().copied().fold(0.0, f64::max);
+        super::output::summary(
+            "bench",
+            &format!("the moving probe's tick timed: the slowest {:.0} us of the 1 ms budget", worst * 1e6),
+        );
+        return Ok(());
     }
     let report = crate::study::bench::run()?;
-    if args.json { say(&serde_json::to_string_pretty(&report)?) } else { say_raw(&report.to_text()) }
+    if args.json {
+        say(&serde_json::to_string_pretty(&report)?)?
+    } else {
+        say_raw(&report.to_text())?
+    }
+    super::output::summary("bench", "the physics core timed (the report above; targets in docs/speed.md)");
+    Ok(())
 }

@@ -6,7 +6,7 @@ use anyhow::{Context as _, bail};
 use clap::Args;
 
 use super::args::{GridArgs, ObjectArgs};
-use super::output::progress_bar;
+use super::output::{progress_bar, summary};
 use crate::calibrate::{CaseSet, CostMode, GeneSpace, Method, Problem, Settings, calibrate};
 use crate::io::write_json_atomic;
 use crate::mechanics::msm::Topology;
@@ -117,5 +117,45 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
              (every evaluation failed); widen or move the --bound ranges"
         );
     }
-    write_json_atomic(&out, &result)
+    write_json_atomic(&out, &result)?;
+    summary("calibrate", &summary_line(&result, model, &name, &out));
+    Ok(())
+}
+
+/// The closing line: the genes found, the cost, and a warning for each gene on a bound.
+fn summary_line(
+    result: &crate::calibrate::CalibrationResult,
+    model: Topology,
+    name: &str,
+    out: &std::path::Path,
+) -> String {
+    let genes: Vec<String> = result
+        .bounds
+        .names
+        .iter()
+        .filter(|n| result.d_identified || n.as_str() != "d")
+        .filter_map(|n| Some(format!("{n} = {}", crate::io::num(GeneSpace::value(&result.params, n)?))))
+        .collect();
+    let mut line = format!(
+        "the {} lattice of material {name} written to {}: {} ({}), cost {} m, {} evaluations, {:.1} s",
+        model.name(),
+        out.display(),
+        genes.join(", "),
+        if result.d_identified { "N/m; d N s/m" } else { "N/m" },
+        crate::io::num(result.cost),
+        result.evaluations,
+        result.wall_s
+    );
+    for (gene, value, side) in result.bounds.on_bounds(&result.params) {
+        if gene != "d" || result.d_identified {
+            line.push_str(&format!(
+                "; warning: {gene} = {} is on its {side} bound (widen it with --bound {gene}=LO:HI)",
+                crate::io::num(value)
+            ));
+        }
+    }
+    if result.cancelled {
+        line.push_str("; cancelled: the best so far");
+    }
+    line
 }

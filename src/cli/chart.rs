@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::output::say;
 use crate::study::chart::ChartOptions;
 
 /// The flags of `chart`.
@@ -28,6 +27,7 @@ pub struct ChartArgs {
 pub fn run(args: ChartArgs) -> anyhow::Result<()> {
     let ChartArgs { out, objects, resolutions, no_stability } = args;
     let opts = ChartOptions::new(objects, resolutions)?;
-    let points = crate::study::write_chart(&out, &opts, !no_stability, &mut |m| eprintln!("{m}"))?;
-    say(&format!("wrote {} points and chart.md to {}", points.len(), out.display()))
+    let points = crate::study::write_chart(&out, &opts, !no_stability, &mut |m| crate::io::progress(m))?;
+    super::output::summary("chart", &format!("wrote {} points and chart.md to {}", points.len(), out.display()));
+    Ok(())
 }

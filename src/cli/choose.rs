@@ -75,7 +75,7 @@ pub fn run(args: ChooseArgs) -> anyhow::Result<()> {
         Some(path) => crate::study::read_chart_csv(&path)?,
         None => {
             let opts = ChartOptions { objects: vec![object], ..ChartOptions::default() };
-            crate::study::chart::compute(&opts, &mut |m| eprintln!("{m}"))?.0
+            crate::study::chart::compute(&opts, &mut |m| crate::io::progress(m))?.0
         }
     };
     if !points.iter().any(|p| p.object == object) {
@@ -86,5 +86,7 @@ pub fn run(args: ChooseArgs) -> anyhow::Result<()> {
     if choice.chosen.is_none() {
         bail!("no model meets the budget");
     }
+    let first = choice.explanation.lines().find(|l| l.starts_with("Chosen:")).unwrap_or("a model meets the budget");
+    super::output::summary("choose", &format!("object {object}: {}", first.trim()));
     Ok(())
 }

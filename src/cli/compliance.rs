@@ -7,7 +7,7 @@ use std::time::Instant;
 use clap::Args;
 
 use super::args::ObjectArgs;
-use super::output::say;
+use super::output::summary;
 use crate::sim::material_surface::compliance::DEFAULT_DIVISIONS;
 use crate::sim::material_surface::compliance::SurfaceCompliance;
 use crate::sim::material_surface::compliance::compact::STEP;
@@ -43,15 +43,19 @@ pub fn run(args: ComplianceArgs) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("the compact form written does not read back: it {e}"))?;
     let worst = full.largest_difference(&back);
     crate::io::write_atomic(&args.out, &bytes)?;
-    say(&format!(
-        "{}: {} written, {:.1} MB (the full compliance {:.1} MB); every entry within {:.1e} of its column's \
+    summary(
+        "compliance",
+        &format!(
+            "{}: {} written, {:.1} MB (the full compliance {:.1} MB); every entry within {:.1e} of its column's \
          largest ({:.1e} allowed), {:.1} s",
-        material.name,
-        args.out.display(),
-        bytes.len() as f64 / 1e6,
-        full.memory_bytes() as f64 / 1e6,
-        worst,
-        STEP / 2.0,
-        started.elapsed().as_secs_f64()
-    ))
+            material.name,
+            args.out.display(),
+            bytes.len() as f64 / 1e6,
+            full.memory_bytes() as f64 / 1e6,
+            worst,
+            STEP / 2.0,
+            started.elapsed().as_secs_f64()
+        ),
+    );
+    Ok(())
 }

@@ -87,5 +87,20 @@ pub fn run(args: DynamicsArgs) -> anyhow::Result<()> {
     let config = dynamic_measure::Configuration { model: choice, params: p, integrator, dt };
     let report = dynamic_measure::measure(&refs, config)
         .with_context(|| format!("measuring {} with {} at dt = {} s", choice.name(), integrator.name(), dt))?;
-    if json { say(&serde_json::to_string_pretty(&report)?) } else { say_raw(&report.to_text(note.as_deref())) }
+    if json {
+        say(&serde_json::to_string_pretty(&report)?)?
+    } else {
+        say_raw(&report.to_text(note.as_deref()))?
+    }
+    super::output::summary(
+        "dynamics",
+        &format!(
+            "{} of material {} with {} at dt = {} s measured (the report above)",
+            choice.name(),
+            material.name,
+            integrator.name(),
+            crate::io::num(dt)
+        ),
+    );
+    Ok(())
 }

@@ -31,8 +31,10 @@ pub fn run(args: ErrorsArgs) -> anyhow::Result<()> {
     let report = crate::validate::accuracy::errors_report(&material, params, args.grid.grid()?)?;
     if args.json {
         // Through a `serde_json::Value`, whose keys are sorted: the order `errors --json` prints.
-        say(&serde_json::to_string_pretty(&serde_json::to_value(&report)?)?)
+        say(&serde_json::to_string_pretty(&serde_json::to_value(&report)?)?)?;
     } else {
-        say_raw(&report.to_text())
+        say_raw(&report.to_text())?;
     }
+    super::output::summary("errors", &report.headline());
+    Ok(())
 }

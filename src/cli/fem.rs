@@ -6,7 +6,7 @@ use anyhow::Context as _;
 use clap::Args;
 
 use super::args::{GridArgs, ObjectArgs};
-use super::output::progress_bar;
+use super::output::{largest_displacement, progress_bar, shown, summary};
 use crate::io::write_json_atomic;
 use crate::mechanics::cases::{Bc, benchmark_cases};
 use crate::mechanics::displacement_file::{CaseRecord, DisplacementFile};
@@ -33,6 +33,7 @@ pub struct FemArgs {
 pub fn run(args: FemArgs) -> anyhow::Result<()> {
     let FemArgs { object, bc, grid, out } = args;
     crate::io::check_output(&out)?;
+    let started = std::time::Instant::now();
     let material = object.material_with_inclusions(None)?;
     let grid = grid.grid()?;
     // The patch cases, and any case of a material with inclusions (no mirror symmetry), solve
@@ -65,5 +66,19 @@ pub fn run(args: FemArgs) -> anyhow::Result<()> {
         params: None,
     };
     file.check_finite()?;
-    write_json_atomic(&out, &file)
+    write_json_atomic(&out, &file)?;
+    summary(
+        "fem",
+        &format!(
+            "{} {} cases of material {} at {}^3 written to {}; largest displacement {}, {:.1} s",
+            file.cases.len(),
+            bc.name(),
+            material.name,
+            grid.n(),
+            shown(&out),
+            crate::io::length(largest_displacement(&file.cases)),
+            started.elapsed().as_secs_f64()
+        ),
+    );
+    Ok(())
 }

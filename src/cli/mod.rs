@@ -41,6 +41,9 @@ pub struct Cli {
     /// What to compute; without one, opens the interactive viewer.
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// Writes nothing on standard error but warnings and errors: no progress, no closing summary.
+    #[arg(long, global = true)]
+    pub quiet: bool,
 }
 
 /// The subcommands.
@@ -119,6 +122,7 @@ pub fn main() -> ExitCode {
 
 /// Runs one parsed command: without one, the interactive viewer.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
+    crate::io::set_quiet(cli.quiet);
     let Some(command) = cli.command else {
         return crate::app::run(crate::app::ViewOptions::default());
     };

@@ -6,7 +6,7 @@ use anyhow::Context as _;
 use clap::Args;
 
 use super::args::{GridArgs, ObjectArgs, ParamArgs};
-use super::output::progress_bar;
+use super::output::{largest_displacement, progress_bar, shown, summary};
 use crate::io::write_json_atomic;
 use crate::mechanics::cases::{Bc, benchmark_cases};
 use crate::mechanics::displacement_file::{CaseRecord, DisplacementFile};
@@ -32,6 +32,7 @@ pub struct MsmArgs {
 pub fn run(args: MsmArgs) -> anyhow::Result<()> {
     let MsmArgs { object, params, grid, out } = args;
     crate::io::check_output(&out)?;
+    let started = std::time::Instant::now();
     let material = object.material_with_inclusions(None)?;
     let params = params.resolve(&material)?;
     let grid = grid.grid()?;
@@ -54,5 +55,19 @@ pub fn run(args: MsmArgs) -> anyhow::Result<()> {
         params: Some(params),
     };
     file.check_finite()?;
-    write_json_atomic(&out, &file)
+    write_json_atomic(&out, &file)?;
+    summary(
+        "msm",
+        &format!(
+            "{} clamped cases of the {} lattice of material {} at {}^3 written to {}; largest displacement {}, {:.1} s",
+            file.cases.len(),
+            params.topology().name(),
+            material.name,
+            grid.n(),
+            shown(&out),
+            crate::io::length(largest_displacement(&file.cases)),
+            started.elapsed().as_secs_f64()
+        ),
+    );
+    Ok(())
 }

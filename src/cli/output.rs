@@ -17,9 +17,29 @@ pub fn say_raw(text: &str) -> anyhow::Result<()> {
     }
 }
 
-/// A progress bar on a terminal (hidden otherwise) counting `len` `unit`.
+/// The command's closing line on standard error: what it wrote, the figure that matters and any
+/// warning (`fem: ...`); nothing with `--quiet`.
+pub fn summary(command: &str, text: &str) {
+    crate::io::progress(&format!("{command}: {text}"));
+}
+
+/// The largest node displacement of any case, metres.
+pub fn largest_displacement(cases: &[crate::mechanics::displacement_file::CaseRecord]) -> f64 {
+    cases
+        .iter()
+        .flat_map(|c| &c.displacements)
+        .map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt())
+        .fold(0.0, f64::max)
+}
+
+/// A path as a summary names it.
+pub fn shown(path: &std::path::Path) -> String {
+    path.display().to_string()
+}
+
+/// A progress bar on a terminal (hidden otherwise, and with `--quiet`) counting `len` `unit`.
 pub fn progress_bar(len: u64, unit: &str) -> indicatif::ProgressBar {
-    if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+    if crate::io::quiet() || !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         return indicatif::ProgressBar::hidden();
     }
     let bar = indicatif::ProgressBar::new(len);

@@ -94,8 +94,12 @@ pub fn run(args: PalpateArgs) -> anyhow::Result<()> {
             map.felt()
         ))?;
     }
-    say(&format!(
-        "surface compliance ready in {prepared:.1} s, presses {pressed:.2} s; wrote {}/map.json, map.csv, map.png",
-        args.out.display()
-    ))
+    super::output::summary(
+        "palpate",
+        &format!(
+            "surface compliance ready in {prepared:.1} s, presses {pressed:.2} s; wrote {}/map.json, map.csv, map.png",
+            args.out.display()
+        ),
+    );
+    Ok(())
 }

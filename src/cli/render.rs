@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::output::say;
 use crate::io::write_atomic;
 use crate::mechanics::msm::Topology;
 use crate::render::scene::{self, ColourMode, StaticScene};
@@ -44,5 +43,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let scene = StaticScene::new(case.as_deref(), model, colour, magnify)?;
     let png = scene.render_png(width, height)?;
     write_atomic(&out, &png.bytes)?;
-    say(&format!("wrote {} ({}x{}, adapter: {} / {:?})", out.display(), width, height, png.adapter, png.backend))
+    super::output::summary(
+        "render",
+        &format!("wrote {} ({}x{}, adapter: {} / {:?})", out.display(), width, height, png.adapter, png.backend),
+    );
+    Ok(())
 }

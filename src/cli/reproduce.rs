@@ -4,8 +4,6 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::output::say;
-
 /// The flags of `reproduce`.
 #[derive(Debug, Args)]
 pub struct ReproduceArgs {
@@ -24,5 +22,12 @@ pub struct ReproduceArgs {
 pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
     let ReproduceArgs { out, seeds, no_shear } = args;
     crate::study::reproduce::run(&out, &crate::study::reproduce::Options { seeds, shear: !no_shear })?;
-    say(&format!("wrote {}", out.join("report.md").display()))
+    super::output::summary(
+        "reproduce",
+        &format!(
+            "the paper's Tables III-V and Figs. 5-6 written to {} (report.md, the SVG and PNG plots, their data)",
+            out.display()
+        ),
+    );
+    Ok(())
 }

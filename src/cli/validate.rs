@@ -96,7 +96,8 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
         report.object = label;
     }
     let full = Full { report, material, inclusions };
-    if json {
+    let line = summary_line(&full, contact);
+    let result = if json {
         say(&serde_json::to_string_pretty(&full)?)
     } else {
         let mut text = full.report.to_text();
@@ -109,7 +110,9 @@ pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
             text += &l.to_text();
         }
         say_raw(&text)
-    }
+    };
+    super::output::summary("validate", &line);
+    result
 }
 
 /// The JSON of `validate`: the touch benchmark's keys and, unless `--own-mesh-only`, `material`.
@@ -173,4 +176,30 @@ fn against_material(
             dir.as_deref().map_or("no cache folder".into(), |d| d.display().to_string())
         )
     })
+}
+
+/// The closing line: the model's touch score and the probe's against the material.
+fn summary_line(full: &Full, contact: crate::sim::press::Contact) -> String {
+    let r = &full.report;
+    let mut line = format!(
+        "{} of material {} at {}^3 against the same-mesh FEM on the held-out touches: force error worst {:.1} %, \
+         median {:.1} %",
+        r.model.name(),
+        r.object,
+        r.nodes_per_axis,
+        100.0 * r.worst_force_error,
+        100.0 * r.median_force_error
+    );
+    if let Some(m) = &full.material {
+        line.push_str(&format!(
+            "; the probe against the material ({} contact) on the held-out presses: worst {:.1} %, median {:.1} %",
+            contact.name(),
+            100.0 * m.worst_error,
+            100.0 * m.median_error
+        ));
+        if !m.missing.is_empty() {
+            line.push_str(&format!("; warning: {} presses missing (the continuum did not converge)", m.missing.len()));
+        }
+    }
+    line
 }

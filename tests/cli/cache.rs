@@ -47,14 +47,14 @@ fn tissue_file(dir: &Path, times: f64) -> (PathBuf, Material) {
 }
 
 /// A script that presses the probe 4 mm into the top face of the material of file `material` and
-/// holds it.
+/// holds it (the linear FEM shows the tissue: a material of a file has no shipped lattice).
 fn press_script(dir: &Path, material: &Path) -> PathBuf {
     let name = material.file_stem().and_then(|n| n.to_str()).expect("a name");
     let script = dir.join(format!("press-{name}.json"));
     std::fs::write(
         &script,
         format!(
-            r#"{{"material":{material:?},"dt":1e-3,"actions":[
+            r#"{{"material":{material:?},"model":"fem-linear","dt":1e-3,"actions":[
             {{"probe":{{"at":[0.03,0.05,0.1],"direction":[0,0,-1],"radius":0.015,"depth":0.004,
               "duration_s":0.1,"samples":2}}}},{{"wait":{{"duration_s":0.2}}}}]}}"#
         ),

@@ -83,3 +83,40 @@ fn material_file_gives_the_same_answer_as_the_preset() {
     assert!(a.status.success() && b.status.success(), "{}", stderr(&a));
     assert_eq!(read(&o1), read(&o2));
 }
+
+/// Every headless command ends with one summary line on standard error (what it wrote, the figure
+/// that matters, a warning such as a gene on its bound), and `--quiet` leaves standard error
+/// empty on success.
+#[test]
+fn the_commands_end_with_a_summary_and_quiet_says_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("fem.json");
+    let out_s = out.to_str().expect("utf8");
+    let o = run(&["fem", "--object", "A", "--out", out_s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.starts_with("fem: 9 clamped cases of material A at 8^3 written to "), "{err}");
+    assert!(err.contains("largest displacement ") && err.trim_end().lines().count() == 1, "{err}");
+    let o = run(&["fem", "--object", "A", "--out", out_s, "--quiet"]);
+    assert!(o.status.success() && stderr(&o).is_empty(), "{}", stderr(&o));
+    let o = run(&["--quiet", "errors", "--object", "A", "--k1", "968.2", "--k2", "1010", "--k3", "1137.7"]);
+    assert!(o.status.success() && stderr(&o).is_empty() && !o.stdout.is_empty(), "{}", stderr(&o));
+    let o = run(&["errors", "--object", "A", "--k1", "968.2", "--k2", "1010", "--k3", "1137.7"]);
+    assert!(
+        stderr(&o).starts_with("errors: the axis lattice of material A at 8^3 on 9 clamped cases"),
+        "{}",
+        stderr(&o)
+    );
+    // The README's shear calibration of B: k2 ends on its lower bound, and the summary says so.
+    let cal = dir.path().join("cal.json");
+    let o = run(&["calibrate", "--object", "B", "--model", "shear", "--out", cal.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.starts_with("calibrate: the shear lattice of material B written to "), "{err}");
+    assert!(err.contains("k2 = ") && err.contains("cost "), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&cal).expect("read")).expect("json");
+    let (k2, lo) = (v["params"]["k2"].as_f64().expect("k2"), v["bounds"]["lo"][1].as_f64().expect("lo"));
+    if (k2 - lo).abs() <= 1e-3 * lo {
+        assert!(err.contains("warning: k2 = ") && err.contains("is on its lower bound"), "{err}");
+    }
+}

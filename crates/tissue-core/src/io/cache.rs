@@ -222,8 +222,14 @@ impl StderrReport {
 
     /// Says `event` on standard error; `true`: the work goes on.
     pub fn event(&mut self, event: CacheEvent<'_>) -> bool {
+        let warning = matches!(event, CacheEvent::Warning(_));
         if let Some(line) = self.line(event) {
-            eprintln!("{line}");
+            // A warning is said even where progress is silenced (`crate::io::set_quiet`).
+            if warning {
+                eprintln!("{line}");
+            } else {
+                crate::io::progress(&line);
+            }
         }
         true
     }

@@ -151,3 +151,24 @@ mod tests {
         assert_eq!(brief_line("at 0.0001 s, 12345 nodes"), "at 0.0001 s, 12345 nodes");
     }
 }
+
+/// Whether progress and summaries on standard error are silenced (the command line's `--quiet`).
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Silences (or not) the progress lines and summaries this process writes on standard error
+/// ([`progress`]); warnings and errors are written all the same.
+pub fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Whether [`set_quiet`] silenced progress and summaries.
+pub fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Writes a line of progress (or a summary) on standard error, unless [`set_quiet`].
+pub fn progress(line: &str) {
+    if !quiet() {
+        eprintln!("{line}");
+    }
+}

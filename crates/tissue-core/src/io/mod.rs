@@ -10,7 +10,7 @@ pub mod read;
 pub mod shape;
 pub mod write;
 
-pub use message::{brief_line, length, num};
+pub use message::{brief_line, length, num, progress, quiet, set_quiet};
 pub use pending::{interrupt, interrupted, on_interrupt, remove_pending};
 pub use read::{MAX_INPUT_BYTES, read_bytes, read_json, read_text};
 pub use write::{MAX_OUTPUT_BYTES, OutputDir, check_output, write_atomic, write_json_atomic, write_json_compact};

@@ -135,6 +135,41 @@ impl GeneSpace {
         Ok(())
     }
 
+    /// The value of gene `name` in `params`, if it has one.
+    pub fn value(params: &MsmParams, name: &str) -> Option<f64> {
+        match name {
+            "k1" => Some(params.k1),
+            "k2" => Some(params.k2),
+            "k3" => Some(params.k3),
+            "d" => Some(params.d),
+            "c12" => params.c12,
+            "c13" => params.c13,
+            "c23" => params.c23,
+            "b" => params.b,
+            _ => None,
+        }
+    }
+
+    /// The genes of `params` on a bound of the box (within 0.1 % of its width): each name, its
+    /// value and `"lower"` or `"upper"`. A gene there may want a wider box.
+    pub fn on_bounds(&self, params: &MsmParams) -> Vec<(String, f64, &'static str)> {
+        self.names
+            .iter()
+            .enumerate()
+            .filter_map(|(i, name)| {
+                let v = Self::value(params, name)?;
+                let tol = 1e-3 * (self.hi[i] - self.lo[i]).abs();
+                if (v - self.lo[i]).abs() <= tol {
+                    Some((name.clone(), v, "lower"))
+                } else if (v - self.hi[i]).abs() <= tol {
+                    Some((name.clone(), v, "upper"))
+                } else {
+                    None
+                }
+            })
+            .collect()
+    }
+
     /// The MSM parameters a chromosome stands for.
     pub fn params(&self, genes: &[f64]) -> MsmParams {
         let get = |name: &str| self.names.iter().position(|n| n == name).map(|i| genes[i]);

@@ -104,6 +104,22 @@ impl ErrorsReport {
         let title = format!("Object {} ({:?} MSM, cost {:.6e} m)", self.object, self.params.topology(), self.cost);
         format_table(&title, &self.cases)
     }
+
+    /// One line: the mean and largest of the cases' average and maximum errors, and the cost.
+    pub fn headline(&self) -> String {
+        let n = self.cases.len().max(1) as f64;
+        let mean = self.cases.iter().map(|e| e.avg_pct).sum::<f64>() / n;
+        let worst = self.cases.iter().map(|e| e.max_pct).fold(0.0, f64::max);
+        format!(
+            "the {} lattice of material {} at {}^3 on {} clamped cases: average error {mean:.3} % of h, largest \
+             {worst:.3} % of h (h the lattice spacing), cost {} m",
+            self.params.topology().name(),
+            self.object,
+            self.nodes_per_axis,
+            self.cases.len(),
+            crate::io::num(self.cost)
+        )
+    }
 }
 
 /// Solves the paper's clamped cases with the FEM and with the MSM of `params` on `grid`, and

@@ -37,7 +37,9 @@ pub fn display_available() -> bool {
 }
 
 /// Runs the viewer until its window closes. `frames` stops after that many frames (smoke tests)
-/// and `screenshot` then saves the last 3D view there as PNG.
+/// and `screenshot` then saves the last frame there as PNG, the window as it showed it (the
+/// panel included, the window's size), or the 3D view alone where the window cannot be read
+/// back (or without `frames`).
 pub fn run(options: ViewOptions) -> anyhow::Result<()> {
     if !display_available() {
         anyhow::bail!("no display (DISPLAY and WAYLAND_DISPLAY are unset), so the viewer cannot open; {HEADLESS_HINT}");

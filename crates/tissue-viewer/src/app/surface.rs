@@ -26,6 +26,10 @@ pub struct Surface {
     egui_renderer: egui_wgpu::Renderer,
     /// egui's window integration.
     pub egui_state: egui_winit::State,
+    /// The next frame drawn is read back ([`Surface::request_capture`]).
+    capture: bool,
+    /// The frame read back: width, height, RGBA8 rows as the window shows them.
+    captured: Option<(u32, u32, Vec<u8>)>,
 }
 
 /// One frame of egui output to draw.
@@ -107,7 +111,20 @@ impl Surface {
             // anti-aliasing from the font atlas. About +15 % frame rate on lavapipe.
             egui.tessellation_options_mut(|o| o.feathering = false);
         }
-        Ok(Self { window, surface, reconfigure: false, device, queue, config, depth, cube, egui_renderer, egui_state })
+        Ok(Self {
+            window,
+            surface,
+            reconfigure: false,
+            device,
+            queue,
+            config,
+            depth,
+            cube,
+            egui_renderer,
+            egui_state,
+            capture: false,
+            captured: None,
+        })
     }
 
     /// Follows the window's new size.
@@ -151,6 +168,18 @@ impl Surface {
         }
     }
 
+    /// Reads the next frame drawn back, as the window shows it (the panel included), where the
+    /// window's surface allows a copy from it ([`Surface::take_capture`]).
+    pub fn request_capture(&mut self) {
+        self.capture = true;
+    }
+
+    /// The frame read back since [`Surface::request_capture`]: width, height and RGBA8 rows;
+    /// `None` where none was (the surface allows no copy, or no frame was drawn).
+    pub fn take_capture(&mut self) -> Option<(u32, u32, Vec<u8>)> {
+        self.captured.take()
+    }
+
     /// Draws and presents one frame; `false` when it was skipped.
     pub fn draw(&mut self, cube: &CubeFrame<'_>, egui: EguiFrame) -> anyhow::Result<bool> {
         let Some(frame) = self.acquire()? else { return Ok(false) };
@@ -187,7 +216,23 @@ impl Surface {
             pass.set_viewport(0.0, 0.0, self.config.width as f32, self.config.height as f32, 0.0, 1.0);
             self.egui_renderer.render(&mut pass.forget_lifetime(), &egui.jobs, &screen);
         }
-        self.queue.submit([encoder.finish()]);
+        if std::mem::take(&mut self.capture) && self.config.usage.contains(wgpu::TextureUsages::COPY_SRC) {
+            let (w, h) = (self.config.width, self.config.height);
+            let mut texels =
+                crate::render::offscreen::read_back(&self.device, &self.queue, encoder, &frame.texture, w, h)?;
+            let bgra =
+                matches!(self.config.format, wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb);
+            for p in texels.chunks_exact_mut(4) {
+                if bgra {
+                    p.swap(0, 2);
+                }
+                // The window is opaque whatever the frame's alpha holds.
+                p[3] = 255;
+            }
+            self.captured = Some((w, h, texels));
+        } else {
+            self.queue.submit([encoder.finish()]);
+        }
         self.window.pre_present_notify();
         self.queue.present(frame);
         if std::mem::take(&mut self.reconfigure) {
@@ -217,8 +262,10 @@ fn surface_config(
     } else {
         wgpu::PresentMode::Fifo
     };
+    // A copy from the frame where the surface allows it: `view --screenshot` saves the window.
+    let copy = caps.usages & wgpu::TextureUsages::COPY_SRC;
     wgpu::SurfaceConfiguration {
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | copy,
         format,
         width: size.width.max(1),
         height: size.height.max(1),

@@ -353,6 +353,10 @@ impl App {
             lines: &self.overlay.lines,
         };
         let egui = EguiFrame { jobs, textures: full.textures_delta, pixels_per_point: full.pixels_per_point };
+        // `--screenshot` with `--frames N`: the last frame is read back as the window shows it.
+        if self.screenshot.is_some() && self.max_frames.is_some_and(|m| self.stats.frames + 1 >= m) {
+            surface.request_capture();
+        }
         if surface.draw(&cube, egui)? {
             self.stats.shown(self.latest.tool_commands);
         }
@@ -519,7 +523,12 @@ pub fn run(options: super::ViewOptions) -> anyhow::Result<()> {
         );
     }
     if let Some(path) = app.screenshot.clone() {
-        // The smoke test's screenshot: the same scene through the offscreen path.
+        if let Some((w, h, rgba)) = app.surface.as_mut().and_then(Surface::take_capture) {
+            // The window as it was shown last, the panel included.
+            crate::io::write_atomic(&path, &crate::render::offscreen::encode_png(w, h, &rgba)?)?;
+            return Ok(());
+        }
+        // Where the window's surface allows no copy: the 3D view through the offscreen path.
         let headless = crate::render::offscreen::Headless::new()?;
         let (w, h) = (960, 540);
         let style = SurfaceStyle {

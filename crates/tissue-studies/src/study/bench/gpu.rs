@@ -101,7 +101,7 @@ pub fn measure(gpu: &ComputeDevice, surface: &MaterialSurface) -> anyhow::Result
     let mut gpu_scale = Vec::new();
     for model in models() {
         for nodes in GPU_NODES {
-            eprintln!("bench: {} at {nodes}^3 on the GPU and the CPU", model.name());
+            crate::io::progress(&format!("bench: {} at {nodes}^3 on the GPU and the CPU", model.name()));
             let grid = Grid::new(nodes)?;
             let fail = |e: String| anyhow::anyhow!("GPU step of {} at {nodes}^3: {e}", model.name());
             let mut on_gpu = GpuTissue::new(gpu, tissue(model, grid)?)?;

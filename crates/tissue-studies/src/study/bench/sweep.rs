@@ -144,12 +144,12 @@ pub fn run() -> anyhow::Result<Sweep> {
                 if (compute == Compute::Gpu && !(gpu.is_ok() && on_gpu)) || (compute == Compute::CpuF32 && !f32_force) {
                     continue;
                 }
-                eprintln!(
+                crate::io::progress(&format!(
                     "bench: {} at {nodes}^3 on the {} ({:.0} s)",
                     model.name(),
                     compute.name(),
                     started.elapsed().as_secs_f64()
-                );
+                ));
                 if let Err(e) = sweep_model(model, nodes, &surface, compute, &mut ticks) {
                     // A model that cannot be built here (its damping's fundamental too large
                     // to factorise): said in each of its rows.

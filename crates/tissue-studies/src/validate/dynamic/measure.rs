@@ -85,7 +85,7 @@ impl References {
         let material_tap = if is_view {
             let dir = crate::io::cache_dir();
             let tap = crate::validate::continuum::cache::tap(material, zeta, dir.as_deref(), &mut |s| {
-                eprintln!("the material's tap ({}): {s}", material.name);
+                crate::io::progress(&format!("the material's tap ({}): {s}", material.name));
             })?;
             let mut report = crate::sim::material_surface::stderr_report();
             let compliance = MaterialSurface::load_or_compute(material, dir.as_deref(), &mut |e| report.event(e))?;

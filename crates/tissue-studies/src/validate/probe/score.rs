@@ -175,12 +175,12 @@ pub fn training_forces(material: &Material) -> anyhow::Result<Vec<(Press, f64)>>
     let tolerance = crate::validate::continuum::DEFAULT_TOLERANCE;
     for (i, case) in cases.iter().enumerate() {
         if cache.get(&case.press, tolerance).is_none() {
-            eprintln!(
+            crate::io::progress(&format!(
                 "tissue-sim: computing the material's force on training press {} of {} ({}; 2 to 15 s each)",
                 i + 1,
                 cases.len(),
                 case.id
-            );
+            ));
         }
         let m = cache.force(material, &case.press, tolerance, &mut |_| {})?;
         out.push((case.press, glam::DVec3::from(m.force).length()));
