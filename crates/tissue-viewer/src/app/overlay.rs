@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use glam::Vec3;
 
 use crate::app::face_map::FaceMap;
-use crate::mechanics::grid::Grid;
+use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::render::gpu::LineVertex;
 use crate::render::mesh::SurfaceMesh;
 use crate::render::scene::ColourMode;
@@ -31,6 +31,9 @@ pub struct Show {
     pub tool: Tool,
     /// The tissue's force on the tool, newtons.
     pub tool_force: [f64; 3],
+    /// A revealed lump of Find the lump: its centre and radius (metres) and the person's mark on
+    /// the top face (x, y).
+    pub lump: Option<([f64; 3], f64, [f64; 2])>,
 }
 
 /// Length of the drag force arrow per newton, metres.
@@ -160,6 +163,34 @@ impl Overlay {
             push_edges(&self.edges, positions, [0.9, 0.9, 0.9, 0.35], |_, _| true, &mut self.lines);
         }
         self.push_tool(show, positions);
+        self.push_lump(show);
+    }
+
+    /// A circle of `radius` about `centre` in the plane of `u` and `v`.
+    fn push_circle(&mut self, centre: Vec3, radius: f32, (u, v): (Vec3, Vec3), colour: [f32; 4]) {
+        for i in 0..CIRCLE_SEGMENTS {
+            let t = |k: usize| k as f32 / CIRCLE_SEGMENTS as f32 * std::f32::consts::TAU;
+            let p = |k: usize| centre + radius * (u * t(k).cos() + v * t(k).sin());
+            self.push_line(p(i), p(i + 1), colour);
+        }
+    }
+
+    /// A revealed lump: three great circles of its sphere, its outline on the top face (just above
+    /// it, where the sphere would show through) and the person's mark as a cross there.
+    fn push_lump(&mut self, show: Show) {
+        let Some((centre, radius, mark)) = show.lump else { return };
+        let (c, r) = (Vec3::from(centre.map(|v| v as f32)), radius as f32);
+        let colour = [1.0, 0.35, 0.8, 0.9];
+        for plane in [(Vec3::X, Vec3::Y), (Vec3::X, Vec3::Z), (Vec3::Y, Vec3::Z)] {
+            self.push_circle(c, r, plane, colour);
+        }
+        let top = CUBE_SIDE_M as f32 + 0.0005;
+        self.push_circle(Vec3::new(c.x, c.y, top), r, (Vec3::X, Vec3::Y), colour);
+        let m = Vec3::new(mark[0] as f32, mark[1] as f32, top);
+        let (a, b) = (Vec3::new(0.004, 0.004, 0.0), Vec3::new(0.004, -0.004, 0.0));
+        let yellow = [1.0, 0.9, 0.2, 1.0];
+        self.push_line(m - a, m + a, yellow);
+        self.push_line(m - b, m + b, yellow);
     }
 
     fn push_line(&mut self, a: Vec3, b: Vec3, colour: [f32; 4]) {
@@ -176,14 +207,8 @@ impl Overlay {
             Tool::None => {}
             Tool::Probe { centre, radius } => {
                 let c = Vec3::from(centre.map(|v| v as f32));
-                let r = radius as f32;
-                let axes = [(Vec3::X, Vec3::Y), (Vec3::X, Vec3::Z), (Vec3::Y, Vec3::Z)];
-                for (u, v) in axes {
-                    for i in 0..CIRCLE_SEGMENTS {
-                        let t = |k: usize| k as f32 / CIRCLE_SEGMENTS as f32 * std::f32::consts::TAU;
-                        let p = |k: usize| c + r * (u * t(k).cos() + v * t(k).sin());
-                        self.push_line(p(i), p(i + 1), [0.95, 0.95, 1.0, 0.9]);
-                    }
+                for plane in [(Vec3::X, Vec3::Y), (Vec3::X, Vec3::Z), (Vec3::Y, Vec3::Z)] {
+                    self.push_circle(c, radius as f32, plane, [0.95, 0.95, 1.0, 0.9]);
                 }
             }
             Tool::Drag { node, target } => {

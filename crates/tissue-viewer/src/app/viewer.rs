@@ -329,6 +329,10 @@ impl App {
             fixed: s.show_fixed,
             tool: self.state.shown.tool,
             tool_force: self.latest.tool_force,
+            lump: self.state.shown.exercise.as_ref().and_then(|e| {
+                let (mark, _) = e.mark?;
+                Some((e.lump.inclusion.centre, e.lump.inclusion.radius, mark))
+            }),
         };
         let fem = self.state.shown.fem_answer.as_deref();
         let map =

@@ -500,4 +500,19 @@ mod tests {
         other.stiffness *= 2.0;
         assert!(shipped(&other).is_none());
     }
+
+    /// One scratch pressed at the same place on two compliances gives each its own force: the
+    /// contact followed between solves is never another compliance's.
+    #[test]
+    fn a_scratch_pressed_on_another_compliance_solves_afresh() {
+        let (a, b) = (shipped(&Material::object_a()), shipped(&Material::object_b()));
+        let (a, b) = (a.expect("A's"), b.expect("B's"));
+        let at = [0.05, 0.05, 0.111];
+        let alone = |c: &SurfaceCompliance| c.press(at, 0.015, &mut SurfaceContactScratch::default()).expect("a press");
+        let mut shared = SurfaceContactScratch::default();
+        let first = a.press(at, 0.015, &mut shared).expect("a press");
+        let second = b.press(at, 0.015, &mut shared).expect("a press");
+        assert_eq!((first, second), (alone(&a), alone(&b)));
+        assert!((first[2] - second[2]).abs() > 0.2 * second[2], "{first:?} {second:?}");
+    }
 }

@@ -2,7 +2,7 @@
 //! probe, mark it where the probe last pressed, and see how near the mark was, how much the probe
 //! could feel of it and how long it took.
 
-use crate::app::exercise::{FELT_DEPTH_M, LIMITS};
+use crate::app::exercise::{CLINICAL, FELT_DEPTH_M, LIMITS, Ranges};
 use crate::app::state::{Request, Shown, ViewSettings};
 
 /// Draws the section.
@@ -20,6 +20,22 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
         range(ui, "radius (mm)", &mut r.radius_mm, LIMITS.radius_mm, 0.5);
         range(ui, "top under the face (mm)", &mut r.depth_mm, LIMITS.depth_mm, 0.5);
         range(ui, "stiffness (x the tissue)", &mut r.contrast, LIMITS.contrast, 0.1);
+        ui.horizontal(|ui| {
+            if ui
+                .selectable_label(*r == Ranges::default(), "felt (default)")
+                .on_hover_text("lumps a hand feels: the weakest raises the probe's force over it by 11 %")
+                .clicked()
+            {
+                *r = Ranges::default();
+            }
+            if ui
+                .selectable_label(*r == CLINICAL, "clinical (harder)")
+                .on_hover_text("5 to 10 mm, 5 to 20 mm deep, 2 to 10 times: many below the 7 % a hand tells apart")
+                .clicked()
+            {
+                *r = CLINICAL;
+            }
+        });
         ui.horizontal(|ui| {
             ui.label("seed");
             ui.add(egui::DragValue::new(&mut settings.inclusion_seed));
@@ -112,6 +128,9 @@ fn map_row(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reques
             .on_disabled_hover_text("it would show the hidden lump: mark it first");
         if map.clicked() {
             requests.push(Request::MapFace);
+        }
+        if hidden {
+            ui.weak("(after you mark the lump: the map would show where it is)");
         }
         ui.checkbox(&mut settings.show_map, "show the map");
         ui.checkbox(&mut settings.map_contrast, "as contrast");

@@ -100,6 +100,12 @@ impl SurfaceCompliance {
         Self { columns: vec![value; lattice.values].into(), lattice, correction: None }
     }
 
+    /// Which compliance this is while it lives where it is: its columns' and its inclusions'
+    /// correction's addresses (a material with inclusions shares its background's columns).
+    fn identity(&self) -> (usize, usize) {
+        (self.columns.as_ptr() as usize, self.correction.as_ref().map_or(0, |c| std::ptr::from_ref(c) as usize))
+    }
+
     /// Lattice spacing (away from the edges), metres.
     pub fn spacing(&self) -> f64 {
         CUBE_SIDE_M / self.lattice.divisions as f64
@@ -202,7 +208,7 @@ impl SurfaceCompliance {
         coupling: &[[f64; 3]; 3],
         scratch: &mut SurfaceContactScratch,
     ) -> Result<[f64; 3], ComplianceError> {
-        if scratch.follows(centre, radius) && self.follow(centre, radius, shift, coupling, scratch) {
+        if scratch.follows(centre, radius, self.identity()) && self.follow(centre, radius, shift, coupling, scratch) {
             return Ok(scratch.contact.force());
         }
         scratch.factored = None;
@@ -245,7 +251,7 @@ impl SurfaceCompliance {
         solved?;
         previous.extend(c.active.iter().map(|&w| nodes[w]));
         previous.sort_unstable();
-        scratch.factored = Some(Factored { centre, radius, coupling: *coupling });
+        scratch.factored = Some(Factored { centre, radius, coupling: *coupling, compliance: self.identity() });
         Ok(scratch.contact.force())
     }
 
@@ -294,13 +300,15 @@ impl SurfaceCompliance {
     }
 }
 
-/// Where the compliance of the last solve's active set was factorised: the sphere and the modes'
-/// coupling folded in.
+/// Where the compliance of the last solve's active set was factorised: the sphere, the modes'
+/// coupling folded in, and which compliance ([`SurfaceCompliance::identity`]: a scratch pressed
+/// on another, a material's and its background's say, is solved afresh).
 #[derive(Debug, Clone, Copy)]
 struct Factored {
     centre: [f64; 3],
     radius: f64,
     coupling: [[f64; 3]; 3],
+    compliance: (usize, usize),
 }
 
 /// How far the sphere may move from where its contact's compliance was factorised before the
@@ -449,11 +457,13 @@ pub struct SurfaceContactScratch {
 }
 
 impl SurfaceContactScratch {
-    /// Whether the sphere (`centre`, `radius`) is near enough to the last solve's for its
-    /// contact to be followed ([`FOLLOW_M`]).
-    fn follows(&self, centre: [f64; 3], radius: f64) -> bool {
+    /// Whether the sphere (`centre`, `radius`) is near enough to the last solve's, on the same
+    /// compliance, for its contact to be followed ([`FOLLOW_M`]).
+    fn follows(&self, centre: [f64; 3], radius: f64, compliance: (usize, usize)) -> bool {
         let Some(f) = &self.factored else { return false };
-        f.radius == radius && DVec3::from(centre).distance(DVec3::from(f.centre)) <= FOLLOW_M
+        f.compliance == compliance
+            && f.radius == radius
+            && DVec3::from(centre).distance(DVec3::from(f.centre)) <= FOLLOW_M
     }
 
     /// No contact, and no warm start for the next press.
