@@ -20,22 +20,7 @@ pub fn show(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reque
         range(ui, "radius (mm)", &mut r.radius_mm, LIMITS.radius_mm, 0.5);
         range(ui, "top under the face (mm)", &mut r.depth_mm, LIMITS.depth_mm, 0.5);
         range(ui, "stiffness (x the tissue)", &mut r.contrast, LIMITS.contrast, 0.1);
-        ui.horizontal(|ui| {
-            if ui
-                .selectable_label(*r == Ranges::default(), "felt (default)")
-                .on_hover_text("lumps a hand feels: the weakest raises the probe's force over it by 11 %")
-                .clicked()
-            {
-                *r = Ranges::default();
-            }
-            if ui
-                .selectable_label(*r == CLINICAL, "clinical (harder)")
-                .on_hover_text("5 to 10 mm, 5 to 20 mm deep, 2 to 10 times: many below the 7 % a hand tells apart")
-                .clicked()
-            {
-                *r = CLINICAL;
-            }
-        });
+        presets(ui, r);
         ui.horizontal(|ui| {
             ui.label("seed");
             ui.add(egui::DragValue::new(&mut settings.inclusion_seed));
@@ -158,4 +143,24 @@ fn map_row(ui: &mut egui::Ui, settings: &mut ViewSettings, shown: &Shown, reques
         }
         None => {}
     }
+}
+
+/// The two presets of the ranges: lumps a hand feels (the default) and the clinical ones.
+fn presets(ui: &mut egui::Ui, r: &mut Ranges) {
+    ui.horizontal(|ui| {
+        if ui
+            .selectable_label(*r == Ranges::default(), "felt (default)")
+            .on_hover_text("lumps a hand feels: the weakest raises the probe's force over it by 11 %")
+            .clicked()
+        {
+            *r = Ranges::default();
+        }
+        if ui
+            .selectable_label(*r == CLINICAL, "clinical (harder)")
+            .on_hover_text("5 to 10 mm, 5 to 20 mm deep, 2 to 10 times: many below the 7 % a hand tells apart")
+            .clicked()
+        {
+            *r = CLINICAL;
+        }
+    });
 }
