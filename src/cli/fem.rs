@@ -6,7 +6,7 @@ use anyhow::Context as _;
 use clap::Args;
 
 use super::args::{GridArgs, ObjectArgs};
-use super::output::{largest_displacement, progress_bar, shown, summary};
+use super::output::{cases_summary, progress_bar};
 use crate::io::write_json_atomic;
 use crate::mechanics::cases::{Bc, benchmark_cases};
 use crate::mechanics::displacement_file::{CaseRecord, DisplacementFile};
@@ -67,18 +67,7 @@ pub fn run(args: FemArgs) -> anyhow::Result<()> {
     };
     file.check_finite()?;
     write_json_atomic(&out, &file)?;
-    summary(
-        "fem",
-        &format!(
-            "{} {} cases of material {} at {}^3 written to {}; largest displacement {}, {:.1} s",
-            file.cases.len(),
-            bc.name(),
-            material.name,
-            grid.n(),
-            shown(&out),
-            crate::io::length(largest_displacement(&file.cases)),
-            started.elapsed().as_secs_f64()
-        ),
-    );
+    let what = format!("{} {} cases of material {}", file.cases.len(), bc.name(), material.name);
+    cases_summary("fem", &what, &file, &out, started);
     Ok(())
 }

@@ -6,7 +6,7 @@ use anyhow::Context as _;
 use clap::Args;
 
 use super::args::{GridArgs, ObjectArgs, ParamArgs};
-use super::output::{largest_displacement, progress_bar, shown, summary};
+use super::output::{cases_summary, progress_bar};
 use crate::io::write_json_atomic;
 use crate::mechanics::cases::{Bc, benchmark_cases};
 use crate::mechanics::displacement_file::{CaseRecord, DisplacementFile};
@@ -56,18 +56,12 @@ pub fn run(args: MsmArgs) -> anyhow::Result<()> {
     };
     file.check_finite()?;
     write_json_atomic(&out, &file)?;
-    summary(
-        "msm",
-        &format!(
-            "{} clamped cases of the {} lattice of material {} at {}^3 written to {}; largest displacement {}, {:.1} s",
-            file.cases.len(),
-            params.topology().name(),
-            material.name,
-            grid.n(),
-            shown(&out),
-            crate::io::length(largest_displacement(&file.cases)),
-            started.elapsed().as_secs_f64()
-        ),
+    let what = format!(
+        "{} clamped cases of the {} lattice of material {}",
+        file.cases.len(),
+        params.topology().name(),
+        material.name
     );
+    cases_summary("msm", &what, &file, &out, started);
     Ok(())
 }

@@ -23,18 +23,31 @@ pub fn summary(command: &str, text: &str) {
     crate::io::progress(&format!("{command}: {text}"));
 }
 
-/// The largest node displacement of any case, metres.
-pub fn largest_displacement(cases: &[crate::mechanics::displacement_file::CaseRecord]) -> f64 {
-    cases
+/// The summary of a command that wrote a displacement file: `what` ("9 clamped cases of material
+/// A"), where, the largest displacement of any case and the time since `started`.
+pub fn cases_summary(
+    command: &str,
+    what: &str,
+    file: &crate::mechanics::displacement_file::DisplacementFile,
+    out: &std::path::Path,
+    started: std::time::Instant,
+) {
+    let largest = file
+        .cases
         .iter()
         .flat_map(|c| &c.displacements)
         .map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt())
-        .fold(0.0, f64::max)
-}
-
-/// A path as a summary names it.
-pub fn shown(path: &std::path::Path) -> String {
-    path.display().to_string()
+        .fold(0.0, f64::max);
+    summary(
+        command,
+        &format!(
+            "{what} at {}^3 written to {}; largest displacement {}, {:.1} s",
+            file.nodes_per_axis,
+            out.display(),
+            crate::io::length(largest),
+            started.elapsed().as_secs_f64()
+        ),
+    );
 }
 
 /// A progress bar on a terminal (hidden otherwise, and with `--quiet`) counting `len` `unit`.

@@ -65,17 +65,13 @@ struct Plan {
 
 impl Plan {
     fn of(f: &Family, d: usize) -> Self {
-        Self::with_levels(f, d, LEVELS)
-    }
-
-    fn with_levels(f: &Family, d: usize, levels_most: u32) -> Self {
         let level = |q: &[usize; 3]| -> u32 {
             (0..3)
                 .filter(|&c| q[c] > 0 && q[c] < d)
                 .map(|c| q[c].trailing_zeros())
                 .min()
-                .unwrap_or(levels_most)
-                .min(levels_most)
+                .unwrap_or(LEVELS)
+                .min(LEVELS)
         };
         let levels: Vec<u32> = f.targets.iter().map(level).collect();
         let neighbours = f
@@ -84,7 +80,7 @@ impl Plan {
             .zip(&levels)
             .map(|(q, &l)| {
                 let mut out = ([0u32; 4], 0u8);
-                if l >= levels_most {
+                if l >= LEVELS {
                     return out;
                 }
                 let step = 1usize << l;
@@ -172,20 +168,16 @@ impl SurfaceCompliance {
     /// The compliance in its compact form, keyed by `material` (the material it was computed
     /// for): every entry within [`STEP`] / 2 of its column's largest.
     pub fn to_compact(&self, material: &Material) -> Vec<u8> {
-        self.to_compact_with(material, STEP, LEVELS)
-    }
-
-    fn to_compact_with(&self, material: &Material, step: f64, levels: u32) -> Vec<u8> {
         let d = self.lattice.last();
         let mut body = Vec::new();
         let mut read = Vec::new();
         for f in &self.lattice.families {
-            let plan = Plan::with_levels(f, d, levels);
+            let plan = Plan::of(f, d);
             let n = f.targets.len();
             for c in 0..f.columns() {
                 let column = &self.columns[f.offset + 9 * n * c..f.offset + 9 * n * (c + 1)];
                 let largest = column.iter().fold(0.0f64, |m, v| m.max(f64::from(v.abs())));
-                let q = if largest > 0.0 { step * largest } else { 1.0 };
+                let q = if largest > 0.0 { STEP * largest } else { 1.0 };
                 body.extend_from_slice(&q.to_le_bytes());
                 for k in 0..9 {
                     read.clear();
