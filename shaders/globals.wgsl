@@ -9,6 +9,8 @@ struct Globals {
     mode: vec4<f32>,
     // Base colour when the colour map is off.
     base_colour: vec4<f32>,
+    // The colour map's four stops (xyz, linear RGB) at 0, 1/3, 2/3 and 1: `render::gpu::RAMP`.
+    ramp: array<vec4<f32>, 4>,
 };
 
 @group(0) @binding(0) var<uniform> globals: Globals;

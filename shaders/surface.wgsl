@@ -23,19 +23,12 @@ fn vs_main(v: VertexIn) -> VertexOut {
     return out;
 }
 
-// A perceptually ordered blue -> cyan -> yellow -> red ramp for t in [0, 1].
+// The colour map for t in [0, 1]: linear between the globals' four stops (`render::gpu::RAMP`).
 fn colour_map(t: f32) -> vec3<f32> {
-    let s = clamp(t, 0.0, 1.0);
-    let c0 = vec3<f32>(0.15, 0.20, 0.70);
-    let c1 = vec3<f32>(0.10, 0.75, 0.85);
-    let c2 = vec3<f32>(0.95, 0.90, 0.25);
-    let c3 = vec3<f32>(0.85, 0.15, 0.10);
-    if s < 0.3333 {
-        return mix(c0, c1, s * 3.0);
-    } else if s < 0.6667 {
-        return mix(c1, c2, (s - 0.3333) * 3.0);
-    }
-    return mix(c2, c3, (s - 0.6667) * 3.0);
+    let s = clamp(t, 0.0, 1.0) * 3.0;
+    let i = min(u32(floor(s)), 2u);
+    let f = s - f32(i);
+    return mix(globals.ramp[i].xyz, globals.ramp[i + 1u].xyz, f);
 }
 
 @fragment

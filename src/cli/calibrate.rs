@@ -136,13 +136,15 @@ fn summary_line(
         .filter(|n| result.d_identified || n.as_str() != "d")
         .filter_map(|n| Some(format!("{n} = {}", crate::io::num(GeneSpace::value(&result.params, n)?))))
         .collect();
+    let (unit, _) = crate::calibrate::cost_meaning(result.cases, result.cost_mode);
     let mut line = format!(
-        "the {} lattice of material {name} written to {}: {} ({}), cost {} m, {} evaluations, {:.1} s",
+        "the {} lattice of material {name} written to {}: {} ({}), cost {}{}{unit}, {} evaluations, {:.1} s",
         model.name(),
         out.display(),
         genes.join(", "),
         if result.d_identified { "N/m; d N s/m" } else { "N/m" },
         crate::io::num(result.cost),
+        if unit.is_empty() { "" } else { " " },
         result.evaluations,
         result.wall_s
     );

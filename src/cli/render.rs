@@ -42,10 +42,36 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     scene::check_image_size(width, height)?;
     let scene = StaticScene::new(case.as_deref(), model, colour, magnify)?;
     let png = scene.render_png(width, height)?;
-    write_atomic(&out, &png.bytes)?;
+    let what = match &case {
+        Some(id) => format!("{id}, the {} lattice's static answer", model.name()),
+        None => "object A at rest".to_owned(),
+    };
+    let caption = format!("{what}; shape magnified x {}", crate::io::num(magnify));
+    let colour_at = |t: f64| crate::render::gpu::ramp_srgb8(t as f32);
+    let title = match colour {
+        ColourMode::Displacement => Some("displacement (mm)"),
+        ColourMode::Error => Some("lattice - FEM distance (mm)"),
+        ColourMode::None => None,
+    };
+    // A map of all zeros (the cube at rest) has no scale to show.
+    let bar = title.filter(|_| scene.scalar_max > 0.0).map(|t| crate::study::colour_bar::ColourBar {
+        title: t.to_owned(),
+        max: 1e3 * f64::from(scene.scalar_max),
+        colour: &colour_at,
+    });
+    let bytes = crate::study::colour_bar::annotated_png(&png.rgba, (width, height), bar.as_ref(), &caption)
+        .map_err(anyhow::Error::msg)?;
+    write_atomic(&out, &bytes)?;
     super::output::summary(
         "render",
-        &format!("wrote {} ({}x{}, adapter: {} / {:?})", out.display(), width, height, png.adapter, png.backend),
+        &format!(
+            "wrote {} ({}x{} and its colour bar and caption, adapter: {} / {:?})",
+            out.display(),
+            width,
+            height,
+            png.adapter,
+            png.backend
+        ),
     );
     Ok(())
 }

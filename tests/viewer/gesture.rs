@@ -58,7 +58,6 @@ fn forty_pixels_down(radius_mm: f64) -> Vec<Option<tissue_viewer::app::recording
     let scene = Scene {
         mesh: &mesh,
         positions: &positions,
-        tool_force: [0.0; 3],
         tool: ToolKind::Probe,
         probe_radius_mm: radius_mm,
         probe_along_view: false,

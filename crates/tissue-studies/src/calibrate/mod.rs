@@ -64,6 +64,38 @@ pub enum CostMode {
     Transient,
 }
 
+/// What a calibration's cost measures and its unit (`"m"` or `""` for a pure number), by its
+/// training cases and cost mode: the one home of the words the command line and the viewer print.
+pub fn cost_meaning(cases: CaseSet, mode: CostMode) -> (&'static str, &'static str) {
+    match (mode, cases) {
+        (CostMode::Transient, _) => (
+            "m",
+            "the paper's eq. 1 a fixed time after a step load from rest: the sum over the nine clamped face \
+             loads and every node of the distance between the lattice's node and the FEM's static answer",
+        ),
+        (CostMode::Static, CaseSet::Paper) => (
+            "m",
+            "the paper's eq. 1: the sum over the nine clamped face loads and every node of the distance \
+             between the lattice's node and the FEM's, in static equilibrium",
+        ),
+        (CostMode::Static, CaseSet::Touch) => (
+            "",
+            "the sum over the touch benchmark's training cases of (the lattice's response / the FEM's - 1)^2, \
+             a pure number",
+        ),
+        (CostMode::Static, CaseSet::Both) => (
+            "",
+            "the touch cost plus the paper's eq. 1 divided by the sum of the FEM's node displacements (the cost of \
+             no displacement), a pure number",
+        ),
+        (CostMode::Static, CaseSet::Presses) => (
+            "",
+            "the mean over the material's training presses of (the lattice's force with node contact / the \
+             material's - 1)^2, a pure number",
+        ),
+    }
+}
+
 impl Method {
     /// The name used on the command line and in files.
     pub fn name(self) -> &'static str {

@@ -3,13 +3,15 @@
 //! the smallest model that meets a scene's error and rate budget ([`choose`]), the paper's tables
 //! and figures ([`reproduce`]), timings ([`timing`], [`bench`](mod@bench): its sweep of
 //! resolutions and its GPU figures, both on the viewer's scene with the probe pressed) and
-//! scripted interaction ([`script`], `simulate`) and palpation maps ([`palpate`]).
+//! scripted interaction ([`script`], `simulate`) and palpation maps ([`palpate`]); a rendered
+//! picture's colour bar and caption ([`colour_bar`]).
 //!
 //! May use: calibrate, validate, gpu, sim, response, mechanics, io.
 
 pub mod bench;
 pub mod chart;
 pub mod choose;
+pub mod colour_bar;
 pub mod font;
 pub mod names;
 pub mod palpate;

@@ -56,8 +56,6 @@ pub struct Scene<'a> {
     pub mesh: &'a SurfaceMesh,
     /// Node positions now.
     pub positions: &'a [[f32; 3]],
-    /// Force of the tissue on the tool now, newtons.
-    pub tool_force: [f64; 3],
     /// The left-button tool.
     pub tool: ToolKind,
     /// Probe radius, mm.
@@ -152,22 +150,24 @@ pub fn view_input(
                         let side = crate::mechanics::grid::CUBE_SIDE_M as f32;
                         contact = (o + t * d).clamp(Vec3::ZERO, Vec3::splat(side));
                     }
-                } else {
+                } else if !response.drag_started() {
                     // 0.1 mm of indentation per pixel dragged downwards, as deep as the contact
                     // resolves.
                     depth = (depth + (pos.y - last_y) * 1e-4).clamp(0.0, deepest);
                 }
-                *gesture = Gesture::Probe { contact, dir, last_y: pos.y, depth };
+                // The drag starts a few pixels past the press: its first sample touches the surface
+                // (depth 0) and the next one takes the pixels since the press, so that the sphere
+                // glides in from the touch instead of starting inside the tissue.
+                let last_y = if response.drag_started() { last_y } else { pos.y };
+                *gesture = Gesture::Probe { contact, dir, last_y, depth };
                 let press = Press {
                     at: contact.as_dvec3().to_array(),
                     direction: Some(dir.as_dvec3().normalize().to_array().map(|v| v + 0.0)),
                     radius: scene.probe_radius_mm * 1e-3,
                     depth: f64::from(depth),
                 };
+                // The force-depth plot takes the physics thread's readings, not the hand's target.
                 requests.push(Request::Press(press));
-                // The force shown: the tissue's push on the sphere, the same number everywhere.
-                let force = glam::DVec3::from(scene.tool_force).length();
-                requests.push(Request::ForceSample([f64::from(depth) * 1e3, force]));
             }
             _ => {}
         }

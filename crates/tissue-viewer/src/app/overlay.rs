@@ -273,14 +273,10 @@ pub fn legend(ui: &mut egui::Ui, rect: egui::Rect, overlay: &Overlay) {
     label(egui::pos2(x0 + 16.0, bottom + 6.0), egui::Align2::RIGHT_TOP, range, 12.0);
 }
 
-/// The shader's colour ramp, for the legend (same stops as `surface.wgsl`).
+/// The surface's colour ramp, for the legend ([`crate::render::gpu::ramp_srgb8`]).
 fn ramp(t: f32) -> egui::Color32 {
-    let stops = [[0.15, 0.20, 0.70], [0.10, 0.75, 0.85], [0.95, 0.90, 0.25], [0.85, 0.15, 0.10]];
-    let s = t.clamp(0.0, 1.0) * 3.0;
-    let i = (s.floor() as usize).min(2);
-    let f = s - i as f32;
-    let c: [f32; 3] = std::array::from_fn(|k| stops[i][k] * (1.0 - f) + stops[i + 1][k] * f);
-    egui::Color32::from_rgb((c[0] * 255.0) as u8, (c[1] * 255.0) as u8, (c[2] * 255.0) as u8)
+    let [r, g, b] = crate::render::gpu::ramp_srgb8(t);
+    egui::Color32::from_rgb(r, g, b)
 }
 
 /// Samples kept by [`ForceTrace`] (a few seconds of frames).
@@ -293,17 +289,20 @@ pub struct ForceTrace {
     values: [f32; TRACE_LEN],
     len: usize,
     head: usize,
+    /// The last sample's depth, metres, where the reading has one.
+    depth_m: Option<f32>,
 }
 
 impl Default for ForceTrace {
     fn default() -> Self {
-        Self { values: [0.0; TRACE_LEN], len: 0, head: 0 }
+        Self { values: [0.0; TRACE_LEN], len: 0, head: 0, depth_m: None }
     }
 }
 
 impl ForceTrace {
-    /// Adds a sample.
-    pub fn push(&mut self, force_n: f32) {
+    /// Adds a sample: the force and the depth of one reading.
+    pub fn push(&mut self, force_n: f32, depth_m: Option<f32>) {
+        self.depth_m = depth_m;
         self.values[self.head] = force_n;
         self.head = (self.head + 1) % TRACE_LEN;
         self.len = (self.len + 1).min(TRACE_LEN);
@@ -320,7 +319,7 @@ impl ForceTrace {
 
     /// The box [`ForceTrace::draw`] fills, with or without a line on the contact.
     pub fn size(with_note: bool) -> egui::Vec2 {
-        egui::vec2(if with_note { 230.0 } else { 150.0 }, if with_note { 74.0 } else { 56.0 })
+        egui::vec2(if with_note { 230.0 } else { 170.0 }, if with_note { 74.0 } else { 56.0 })
     }
 
     /// Draws the last force and the trace in a small box with its top-left corner at `at`, and
@@ -336,7 +335,10 @@ impl ForceTrace {
         painter.text(
             at + egui::vec2(6.0, 4.0),
             egui::Align2::LEFT_TOP,
-            format!("{last:.2} N"),
+            match self.depth_m {
+                Some(d) => format!("{last:.2} N at {:.1} mm", 1e3 * d),
+                None => format!("{last:.2} N"),
+            },
             egui::FontId::proportional(16.0),
             egui::Color32::WHITE,
         );

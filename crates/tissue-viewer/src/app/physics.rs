@@ -117,8 +117,9 @@ pub struct Published {
     pub revision: u64,
     /// Whether the probe's force comes from the material's surface compliance.
     pub surface_probe: bool,
-    /// The probe's reading of the last step while it is pressed.
-    pub probe: Option<crate::sim::press::ProbeReading>,
+    /// The probe of the last step while it is pressed: the press of that step (where the sphere
+    /// is drawn) and its reading (the force shown beside it, in the panel and on the plot).
+    pub probe: Option<(crate::sim::press::Press, crate::sim::press::ProbeReading)>,
 }
 
 /// The physics thread died (the channel is closed).

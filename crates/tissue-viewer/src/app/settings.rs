@@ -144,10 +144,16 @@ pub struct Shown {
     pub history: Vec<GenerationStats>,
     /// The calibration's result, to apply.
     pub result: Option<MsmParams>,
+    /// The whole of the last calibration's outcome (its genes, cost and box), for the panel.
+    pub calibration: Option<Box<crate::calibrate::CalibrationResult>>,
+    /// The last Apply of a calibration's result: what ran before it (parameters and touch score).
+    pub applied: Option<Applied>,
     /// Whether a calibration runs.
     pub calibrating: bool,
     /// Generations of the running calibration.
     pub calib_generations: usize,
+    /// Training cases of the running calibration (its cost's unit).
+    pub calib_cases: crate::calibrate::CaseSet,
     /// A note for the user.
     pub note: Option<String>,
     /// Probe force against depth (mm, N).
@@ -163,8 +169,13 @@ pub struct Shown {
     pub tool: crate::sim::Tool,
     /// The probe's last position (centre, radius; metres), kept after it is let go.
     pub last_probe: Option<([f64; 3], f64)>,
-    /// The FEM's and the model's probe force at the last probe position, solved on request.
-    pub fem_probe: Option<ProbeComparison>,
+    /// The physics thread's last reading while the probe was pressed in, and the press of its
+    /// step (kept after the probe is let go): what a comparison compares.
+    pub last_reading: Option<(crate::sim::press::Press, crate::sim::press::ProbeReading)>,
+    /// The last press compared with the material's force and the running model's, on request.
+    pub comparison: Option<ProbeComparison>,
+    /// Whether a comparison is computed.
+    pub comparing: bool,
     /// The material file's inclusions: the probe feels them and the model steps them
     /// ([`Shown::modelled_material`]); `material` is their background (its calibrated tissue).
     pub inclusions: Vec<crate::mechanics::inclusion::Inclusion>,
@@ -206,14 +217,32 @@ impl Shown {
     }
 }
 
-/// The probe force of the FEM and of the running model at one sphere position (static, small
-/// displacements, node contact).
+/// What ran before a calibration's result was applied, to show what changed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Applied {
+    /// The running parameters before.
+    pub from: MsmParams,
+    /// Their touch validation scores, where they were computed.
+    pub before: Option<crate::sim::shipped::RecordedScores>,
+    /// The parameters applied (the score shown after is theirs only while they run).
+    pub to: MsmParams,
+}
+
+/// One press of the probe set beside the material's force for it and the running model's own:
+/// what the person felt, what the material gives, and what the model's nodes alone would give.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ProbeComparison {
-    /// The sphere's centre, metres.
-    pub centre: [f64; 3],
-    /// The FEM's force, newtons.
-    pub fem_n: f64,
-    /// The model's force, newtons, or why it has none.
+    /// The press compared: where the sphere was, along which direction, how deep.
+    pub press: crate::sim::press::Press,
+    /// The force shown for it (the physics thread's reading), newtons, and the contact that gave
+    /// it.
+    pub shown_n: f64,
+    /// The contact of the shown force.
+    pub shown_contact: crate::sim::press::Contact,
+    /// The material's force on the same press at rest: the converged continuum (graded hex8
+    /// refined until the force changes by less than 1 %), or why there is none.
+    pub material_n: Result<f64, String>,
+    /// The running model's static force on the same press with its own surface nodes as the
+    /// contact (small displacements), or why there is none.
     pub model_n: Result<f64, String>,
 }

@@ -233,7 +233,6 @@ impl App {
                 let scene = Scene {
                     mesh: &self.mesh,
                     positions: &self.latest.positions,
-                    tool_force: self.latest.tool_force,
                     tool: settings.tool,
                     probe_radius_mm: settings.probe_radius_mm,
                     probe_along_view: settings.probe_along_view,
@@ -248,15 +247,28 @@ impl App {
         Some(full)
     }
 
-    /// The probe's force as a number and a small plot next to the sphere in the 3D view.
+    /// The tool as drawn: the probe's sphere where the physics step of the shown force had it
+    /// (the hand's target runs ahead of it by the glide), else the tool asked for.
+    fn drawn_tool(&self) -> crate::sim::Tool {
+        match (self.state.shown.tool, self.latest.probe) {
+            (crate::sim::Tool::Probe { .. }, Some((press, _))) => press.tool(),
+            (tool, _) => tool,
+        }
+    }
+
+    /// The probe's force and depth as numbers and a small plot of the force next to the sphere in
+    /// the 3D view: the physics thread's one reading, of the step the sphere is drawn at.
     fn force_beside_the_probe(&mut self, painter: &egui::Painter, rect: egui::Rect) {
-        let crate::sim::Tool::Probe { centre, radius } = self.state.shown.tool else {
+        let crate::sim::Tool::Probe { centre, radius } = self.drawn_tool() else {
             self.trace.clear();
             return;
         };
-        // The physics thread's reading: the force against the push (|F| until its first one).
-        let f = self.latest.probe.map_or_else(|| glam::DVec3::from(self.latest.tool_force).length(), |r| r.force_n);
-        self.trace.push(f as f32);
+        // The force against the push and the depth (|F| until the first reading).
+        let (f, depth) = self.latest.probe.map_or_else(
+            || (glam::DVec3::from(self.latest.tool_force).length(), None),
+            |(_, r)| (r.force_n, Some(r.depth_m)),
+        );
+        self.trace.push(f as f32, depth.map(|d| d as f32));
         let aspect = rect.width() / rect.height().max(1.0);
         let c = glam::DVec3::from(centre).as_vec3();
         let clip = self.camera.view_proj(aspect) * c.extend(1.0);
@@ -271,8 +283,10 @@ impl App {
         // Beside the sphere, kept inside the view.
         // Where the force is not the material's: which contact gave it, and when the
         // material's will (`model nodes, the material's in 12 s`).
-        let nodes =
-            self.latest.probe.map_or(!self.latest.surface_probe, |r| r.contact == crate::sim::press::Contact::Nodes);
+        let nodes = self
+            .latest
+            .probe
+            .map_or(!self.latest.surface_probe, |(_, r)| r.contact == crate::sim::press::Contact::Nodes);
         let note = nodes.then(|| match &self.state.shown.material_contact_in {
             Some(when) => format!("model nodes, {when}"),
             None => "model nodes".to_owned(),
@@ -284,6 +298,7 @@ impl App {
 
     fn frame(&mut self) -> anyhow::Result<()> {
         self.physics.latest(&mut self.latest);
+        self.state.observe_probe(self.latest.probe);
         self.drawn_revision = self.latest.revision;
         let physics = &self.physics;
         self.state.poll(&mut |c| {
@@ -327,7 +342,7 @@ impl App {
             nodes: s.show_nodes,
             map_contrast: s.map_contrast,
             fixed: s.show_fixed,
-            tool: self.state.shown.tool,
+            tool: self.drawn_tool(),
             tool_force: self.latest.tool_force,
             lump: self.state.shown.exercise.as_ref().and_then(|e| {
                 let (mark, _) = e.mark?;

@@ -27,6 +27,24 @@ struct Globals {
     light_dir: [f32; 4],
     mode: [f32; 4],
     base_colour: [f32; 4],
+    ramp: [[f32; 4]; 4],
+}
+
+/// The colour map's stops, blue -> cyan -> yellow -> red at 0, 1/3, 2/3 and 1 (linear RGB): the
+/// one home of the ramp the surface shader draws (through the globals) and the legends show.
+pub const RAMP: [[f32; 3]; 4] = [[0.15, 0.20, 0.70], [0.10, 0.75, 0.85], [0.95, 0.90, 0.25], [0.85, 0.15, 0.10]];
+
+/// The colour map at `t` in [0, 1] (clamped), linear RGB, as the surface shader mixes it.
+pub fn ramp(t: f32) -> [f32; 3] {
+    let s = t.clamp(0.0, 1.0) * 3.0;
+    let i = (s.floor() as usize).min(2);
+    let f = s - i as f32;
+    std::array::from_fn(|k| RAMP[i][k] * (1.0 - f) + RAMP[i + 1][k] * f)
+}
+
+/// The colour map at `t` as 8-bit sRGB, as a lit face facing the light shows it.
+pub fn ramp_srgb8(t: f32) -> [u8; 3] {
+    ramp(t).map(|c| (255.0 * c.clamp(0.0, 1.0).powf(1.0 / 2.2)).round() as u8)
 }
 
 /// How the surface is coloured.
@@ -257,6 +275,7 @@ impl CubeRenderer {
             light_dir: [0.4, -0.5, 0.8, 0.0],
             mode: [if style.colour_map { 1.0 } else { 0.0 }, 1.0, if style.encode_srgb { 1.0 } else { 0.0 }, 0.0],
             base_colour: [style.base_colour[0], style.base_colour[1], style.base_colour[2], 1.0],
+            ramp: RAMP.map(|c| [c[0], c[1], c[2], 0.0]),
         };
         queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         queue.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&mesh.vertices));

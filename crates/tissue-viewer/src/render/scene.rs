@@ -48,6 +48,8 @@ pub struct StaticScene {
 pub struct RenderedPng {
     /// PNG bytes.
     pub bytes: Vec<u8>,
+    /// The same image's pixels, 8-bit RGBA rows.
+    pub rgba: Vec<u8>,
     /// Adapter name.
     pub adapter: String,
     /// Backend.
@@ -133,7 +135,12 @@ impl StaticScene {
         let view_proj = OrbitCamera::default().view_proj(width as f32 / height.max(1) as f32);
         let rgba = headless.render((width, height), view_proj, style, &mesh, &lines)?;
         let bytes = encode_png(width, height, &rgba)?;
-        Ok(RenderedPng { bytes, adapter: headless.adapter_info.name.clone(), backend: headless.adapter_info.backend })
+        Ok(RenderedPng {
+            bytes,
+            rgba,
+            adapter: headless.adapter_info.name.clone(),
+            backend: headless.adapter_info.backend,
+        })
     }
 }
 

@@ -190,7 +190,7 @@ fn convergence(
         mean_series.push((format!("{method:?}"), m));
         sd_series.push((format!("{method:?}"), sd));
     }
-    let svg = line_panels(
+    let figure = line_panels(
         &format!("Fig. {fig}: object {name}, fitness per generation (mean over {} seeds)", seeds),
         "generation (SA: temperature step)",
         &[
@@ -206,10 +206,11 @@ fn convergence(
             ),
         ],
     )?;
-    let fig_name = format!("fig{fig}_object_{name}.svg");
-    files.add(fig_name.clone(), svg);
+    let fig_name = format!("fig{fig}_object_{name}.png");
+    files.add(format!("fig{fig}_object_{name}.svg"), figure.svg);
+    files.add(fig_name.clone(), figure.png);
     files.add(format!("fig{fig}_object_{name}.csv"), csv);
-    let _ = writeln!(md, "\n![Fig. {fig}]({fig_name})\n");
+    let _ = writeln!(md, "\n![Fig. {fig}]({fig_name}) ([SVG](fig{fig}_object_{name}.svg))\n");
     Ok(())
 }
 

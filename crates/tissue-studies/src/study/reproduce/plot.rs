@@ -13,13 +13,43 @@ pub struct Series<'a> {
 const COLOURS: [RGBColor; 4] =
     [RGBColor(31, 119, 180), RGBColor(214, 39, 40), RGBColor(44, 160, 44), RGBColor(148, 103, 189)];
 
-/// Renders panels side by side (one `(title, y label, series)` each) into an SVG string.
-pub fn line_panels(title: &str, x_label: &str, panels: &[(&str, &str, Vec<Series<'_>>)]) -> anyhow::Result<String> {
+/// One figure in the two forms a report carries: SVG (scales) and PNG (shows anywhere).
+pub struct Figure {
+    /// The SVG text.
+    pub svg: String,
+    /// The PNG bytes, the same drawing in pixels.
+    pub png: Vec<u8>,
+}
+
+/// Renders panels side by side (one `(title, y label, series)` each) as SVG and as PNG.
+pub fn line_panels(title: &str, x_label: &str, panels: &[(&str, &str, Vec<Series<'_>>)]) -> anyhow::Result<Figure> {
     crate::study::font::register().map_err(anyhow::Error::msg)?;
+    let size = (520 * panels.len().max(1) as u32, 420);
     let mut svg = String::new();
+    draw(SVGBackend::with_string(&mut svg, size).into_drawing_area(), title, x_label, panels)?;
+    let mut rgb = vec![255u8; 3 * (size.0 * size.1) as usize];
+    draw(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area(), title, x_label, panels)?;
+    let mut png = std::io::Cursor::new(Vec::new());
+    image::write_buffer_with_format(
+        &mut png,
+        &rgb,
+        size.0,
+        size.1,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| anyhow::anyhow!("cannot encode the figure: {e}"))?;
+    Ok(Figure { svg, png: png.into_inner() })
+}
+
+/// Draws the panels on `root`, whatever its backend.
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    x_label: &str,
+    panels: &[(&str, &str, Vec<Series<'_>>)],
+) -> anyhow::Result<()> {
     {
-        let width = 520 * panels.len().max(1) as u32;
-        let root = SVGBackend::with_string(&mut svg, (width, 420)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow::anyhow!("plot: {e}"))?;
         let root = root.titled(title, ("sans-serif", 20)).map_err(|e| anyhow::anyhow!("plot: {e}"))?;
         let areas = root.split_evenly((1, panels.len().max(1)));
@@ -66,5 +96,5 @@ pub fn line_panels(title: &str, x_label: &str, panels: &[(&str, &str, Vec<Series
         }
         root.present().map_err(|e| anyhow::anyhow!("plot: {e}"))?;
     }
-    Ok(svg)
+    Ok(())
 }

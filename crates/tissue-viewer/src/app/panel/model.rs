@@ -24,8 +24,9 @@ fn validation(ui: &mut egui::Ui, shown: &Shown, requests: &mut Vec<Request>) {
         }
         Some(Ok(v)) => {
             ui.label(format!(
-                "touch validation (held-out touches): force error worst {:.1} %, median {:.1} %; lowest six modes \
-                 within {:.1} %",
+                "touch validation of the model's own nodes (held-out touches against the FEM; what a drag or a \
+                 load case moves, not what the probe feels): force error worst {:.1} %, median {:.1} %; lowest six \
+                 modes within {:.1} %",
                 100.0 * v.worst_force_error,
                 100.0 * v.median_force_error,
                 100.0 * v.worst_frequency_error
@@ -35,7 +36,8 @@ fn validation(ui: &mut egui::Ui, shown: &Shown, requests: &mut Vec<Request>) {
                     ui.colored_label(
                         egui::Color32::from_rgb(230, 200, 90),
                         format!(
-                            "misses the {} % force budget by {:.1} points; the FEM meets it",
+                            "its nodes miss the {} % force budget by {:.1} points (the probe on the material's \
+                             surface does not feel them); the FEM meets it",
                             crate::study::choose::DEFAULT_MAX_FORCE_ERROR_PCT,
                             100.0 * (v.worst_force_error - FORCE_BUDGET)
                         ),

@@ -41,7 +41,9 @@ pub fn show(
     if settings.tool == ToolKind::Probe {
         // The number beside the sphere, said once.
         match ctx.published.probe {
-            Some(r) => ui.label(format!("probe force {:.2} N at {:.1} mm indentation", r.force_n, r.depth_m * 1e3)),
+            Some((_, r)) => {
+                ui.label(format!("probe force {:.2} N at {:.1} mm indentation", r.force_n, r.depth_m * 1e3))
+            }
             None => ui.label(format!("probe force {norm:.2} N")),
         };
         ui.label(contact_line(shown, ctx));
@@ -54,26 +56,8 @@ pub fn show(
             crate::app::overlay::ARROW_M_PER_N * 1e3
         ));
     }
-    if settings.tool == ToolKind::Probe && shown.last_probe.is_some() {
-        ui.horizontal_wrapped(|ui| {
-            if ui.button("FEM force at the last probe position").clicked() {
-                requests.push(Request::FemProbeForce);
-            }
-            if let Some(cmp) = &shown.fem_probe {
-                let c = cmp.centre;
-                let model = match &cmp.model_n {
-                    Ok(m) => format!("model {m:.3} N (x{:.3})", m / cmp.fem_n.max(f64::MIN_POSITIVE)),
-                    Err(e) => format!("model: {e}"),
-                };
-                ui.label(format!(
-                    "sphere at ({:.1}, {:.1}, {:.1}) mm, static with node contact: FEM {:.3} N, {model}",
-                    c[0] * 1e3,
-                    c[1] * 1e3,
-                    c[2] * 1e3,
-                    cmp.fem_n
-                ));
-            }
-        });
+    if settings.tool == ToolKind::Probe && shown.last_reading.is_some() {
+        comparison(ui, shown, requests);
     }
     if settings.tool == ToolKind::Probe {
         force_depth_plot(ui, shown, ctx);
@@ -127,6 +111,56 @@ pub fn tool_picker(ui: &mut egui::Ui, settings: &mut ViewSettings) {
         ui.selectable_value(&mut settings.tool, ToolKind::Probe, "probe (p)");
         ui.selectable_value(&mut settings.tool, ToolKind::Orbit, "camera only (c)");
     });
+}
+
+/// The last press beside the material's force for it and the running model's own, each said
+/// for what it is.
+fn comparison(ui: &mut egui::Ui, shown: &Shown, requests: &mut Vec<Request>) {
+    ui.horizontal_wrapped(|ui| {
+        let busy = shown.comparing;
+        let button = ui.add_enabled(!busy, egui::Button::new("Compare this press with the material")).on_hover_text(
+            "The force shown for the last press beside the material's own force on the same press at rest (the \
+             converged continuum: graded hex8 meshes refined until the force changes by less than 1 %) and the \
+             running model's with its own surface nodes as the contact",
+        );
+        if button.clicked() {
+            requests.push(Request::ComparePress);
+        }
+        if busy {
+            ui.label("computing the material's force...");
+        }
+    });
+    let Some(cmp) = &shown.comparison else { return };
+    let p = &cmp.press;
+    let at = p.at.map(|c| format!("{:.1}", 1e3 * c)).join(", ");
+    ui.label(format!(
+        "press of a {} sphere {} deep at ({at}) mm:",
+        crate::io::length(p.radius),
+        crate::io::length(p.depth)
+    ));
+    let rel = |f: f64, of: f64| if of > 0.0 { format!(" ({:+.1} %)", 100.0 * (f / of - 1.0)) } else { String::new() };
+    let material = cmp.material_n.as_ref().ok().copied();
+    let shown_what = match cmp.shown_contact {
+        crate::sim::press::Contact::Surface => "the material's surface compliance, with its modes",
+        crate::sim::press::Contact::Nodes => "the model's surface nodes",
+    };
+    ui.label(format!(
+        "  shown {:.2} N{}: what the probe felt ({shown_what})",
+        cmp.shown_n,
+        material.map_or(String::new(), |m| rel(cmp.shown_n, m))
+    ));
+    match &cmp.material_n {
+        Ok(m) => ui.label(format!("  the material {m:.2} N: the converged continuum, at rest")),
+        Err(e) => ui.label(format!("  the material: {e}")),
+    };
+    match &cmp.model_n {
+        Ok(f) => ui.label(format!(
+            "  the running model's own nodes {f:.2} N{}: what the model alone gives (static, its surface nodes the \
+             contact); the probe does not feel this",
+            material.map_or(String::new(), |m| rel(*f, m))
+        )),
+        Err(e) => ui.label(format!("  the running model's own nodes: {e}")),
+    };
 }
 
 /// How to press and slide the probe, and its size.

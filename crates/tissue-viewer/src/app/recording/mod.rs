@@ -177,13 +177,14 @@ impl Timeline {
         }
     }
 
-    /// The probe's reading of the last step while the sphere is pressed: its force, its
-    /// component against the push, the depth the sphere is at and the contact.
-    pub fn reading(&self, sim: &Simulation) -> Option<ProbeReading> {
+    /// The probe of the last step while the sphere is pressed: where the sphere was (the press
+    /// of that step) and its reading (its force, its component against the push, the depth and
+    /// the contact), one step's both.
+    pub fn reading(&self, sim: &Simulation) -> Option<(Press, ProbeReading)> {
         let Current::Probe { radius, direction, now, .. } = &self.current else { return None };
         matches!(sim.tool, Tool::Probe { .. }).then(|| {
             let p = Press { at: now.0, direction: Some(*direction), radius: *radius, depth: now.1 };
-            ProbeReading::of(sim, &p)
+            (p, ProbeReading::of(sim, &p))
         })
     }
 

@@ -238,35 +238,47 @@ impl ViewerState {
         }
     }
 
-    /// The FEM's force and the running model's on the probe sphere where it was last pressed,
-    /// both static in their small-displacement response with the same node contact.
-    pub(super) fn start_fem_probe(&mut self) {
-        let Some((centre, radius)) = self.shown.last_probe else {
+    /// The probe's last press set beside the material's force for it (the converged continuum of
+    /// the felt material, kept in the cache folder) and the running model's static force with its
+    /// own nodes as the contact.
+    pub(super) fn start_comparison(&mut self) {
+        let Some((press, reading)) = self.shown.last_reading else {
             self.shown.note = Some("press the probe into the cube first".into());
             return;
         };
-        let (material, grid) = (self.shown.modelled_material(), self.grid);
+        let (felt, grid) = (self.shown.felt_material(), self.grid);
         let model = self.model_under_test();
+        let modelled = self.shown.modelled_material();
         let wake = Arc::clone(&self.wake);
-        let started = self.fem_probe.start(
-            "FEM probe force",
+        let started = self.comparison.start(
+            "press comparison",
             move || wake(),
             move |ctx| {
-                let force = |(m, p): (Model, MsmParams)| -> anyhow::Result<f64> {
-                    let (mut r, _) = crate::validate::touch::score::responder(m, Some(p), &material, grid)?;
-                    Ok(r.solver.probe(&grid, centre, radius)?.force_n())
+                let material_n = {
+                    let dir = crate::io::cache_dir();
+                    let mut kept = crate::validate::continuum::cache::ContinuumCache::open(&felt, dir.as_deref());
+                    let tolerance = crate::validate::continuum::DEFAULT_TOLERANCE;
+                    let r = kept.force(&felt, &press, tolerance, &mut |_| {}).map(|c| c.force_n);
+                    kept.save();
+                    r.map_err(|e| format!("{e:#}"))
                 };
-                let fem = force((Model::Fem(crate::mechanics::fem::dynamics::Formulation::Linear), model.1));
-                let r = fem.map(|f| ProbeComparison {
-                    centre,
-                    fem_n: f,
-                    model_n: force(model).map_err(|e| format!("{e:#}")),
-                });
-                ctx.send(r.map_err(|e| format!("{e:#}")));
+                let model_n = (|| -> anyhow::Result<f64> {
+                    let (mut r, _) = crate::validate::touch::score::responder(model.0, Some(model.1), &modelled, grid)?;
+                    Ok(r.solver.probe(&grid, press.centre(), press.radius)?.force_n())
+                })()
+                .map_err(|e| format!("{e:#}"));
+                ctx.send(Ok(ProbeComparison {
+                    press,
+                    shown_n: reading.force_n,
+                    shown_contact: reading.contact,
+                    material_n,
+                    model_n,
+                }));
             },
         );
-        if let Err(e) = started {
-            self.shown.note = Some(e.to_string());
+        match started {
+            Ok(()) => self.shown.comparing = true,
+            Err(e) => self.shown.note = Some(e.to_string()),
         }
     }
 
@@ -298,9 +310,11 @@ impl ViewerState {
             Ok(()) => {
                 self.shown.history.clear();
                 self.shown.result = None;
+                self.shown.calibration = None;
                 self.shown.note = None;
                 self.shown.calibrating = true;
                 self.shown.calib_generations = self.settings.calib_generations;
+                self.shown.calib_cases = self.settings.calib_cases;
             }
             Err(e) => self.shown.note = Some(format!("cannot start the calibration: {e}")),
         }

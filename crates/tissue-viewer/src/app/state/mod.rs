@@ -20,7 +20,7 @@ use std::sync::Arc;
 
 use super::calibration_job::Progress;
 use super::physics::{Command, Replacement};
-pub use super::settings::{ProbeComparison, Shown, ToolKind, ViewSettings};
+pub use super::settings::{Applied, ProbeComparison, Shown, ToolKind, ViewSettings};
 use super::worker::{Slot, State};
 use crate::mechanics::cases::LoadCase;
 use crate::mechanics::fem::FemModel;
@@ -44,8 +44,9 @@ pub enum Request {
     SetCompute,
     /// The FEM in place of the lattice.
     SelectFem(crate::mechanics::fem::dynamics::Formulation),
-    /// Solve the FEM's force for the probe's current position (in the background).
-    FemProbeForce,
+    /// Compare the probe's last press with the material's force and the running model's own
+    /// (in the background).
+    ComparePress,
     /// Edited parameters.
     EditParams(MsmParams),
     /// Integrator asked for (`None`: automatic) and time step, s.
@@ -96,7 +97,7 @@ pub struct ViewerState {
     validation: Slot<jobs::Scored>,
     /// The model changed while a validation ran: score it again when that one ends.
     validation_stale: bool,
-    fem_probe: Slot<Result<ProbeComparison, String>>,
+    comparison: Slot<Result<ProbeComparison, String>>,
     compliance: Slot<jobs::ComplianceMessage>,
     /// The material changed while a surface compliance was computed: its result is dropped and
     /// the new material's started when it ends.
@@ -165,8 +166,11 @@ impl ViewerState {
                 fem_answer: None,
                 history: Vec::new(),
                 result: None,
+                calibration: None,
+                applied: None,
                 calibrating: false,
                 calib_generations: 0,
+                calib_cases: crate::calibrate::CaseSet::Touch,
                 note: None,
                 force_depth: Vec::new(),
                 fem: None,
@@ -174,7 +178,9 @@ impl ViewerState {
                 inclusion_validation: None,
                 tool: Tool::None,
                 last_probe: None,
-                fem_probe: None,
+                last_reading: None,
+                comparison: None,
+                comparing: false,
                 inclusions: Vec::new(),
                 exercise: None,
                 face_map: None,
@@ -184,7 +190,7 @@ impl ViewerState {
             calibration: Slot::default(),
             validation: Slot::default(),
             validation_stale: false,
-            fem_probe: Slot::default(),
+            comparison: Slot::default(),
             compliance: Slot::default(),
             compliance_stale: false,
             compliance_since: (std::time::Instant::now(), None),
@@ -244,10 +250,11 @@ impl ViewerState {
                 self.start_validation();
                 send(Command::Replace(self.replacement()));
             }
-            Request::FemProbeForce => self.start_fem_probe(),
+            Request::ComparePress => self.start_comparison(),
             Request::SetResolution(n) => self.set_resolution(n, send),
             Request::SetCompute => send(Command::Replace(self.replacement())),
             Request::EditParams(p) => {
+                self.shown.applied = None;
                 let p = p.with_ties(self.shown.material.is_transversely_isotropic());
                 self.shown.params = p;
                 if self.shown.fem.take().is_some() {
@@ -277,11 +284,7 @@ impl ViewerState {
             }
             Request::StartCalibration => self.start_calibration(),
             Request::CancelCalibration => self.calibration.cancel(),
-            Request::ApplyCalibration => {
-                if let Some(p) = self.shown.result {
-                    self.handle(Request::EditParams(p), send);
-                }
-            }
+            Request::ApplyCalibration => self.apply_calibration(send),
             Request::Tool(t) => {
                 self.shown.tool = t;
                 send(Command::SetTool(t));
@@ -349,15 +352,18 @@ impl ViewerState {
         let ended = self.calibration.poll(|msg| match msg {
             Progress::Generation(s) => shown.history.push(s),
             Progress::Done(Ok(r)) => {
+                let (unit, _) = crate::calibrate::cost_meaning(r.cases, r.cost_mode);
                 shown.note = Some(format!(
-                    "calibration {}: cost {:.4e} m in {:.1} s ({} evaluations){}",
+                    "calibration {}: cost {:.4e}{}{unit} in {:.1} s ({} evaluations){}",
                     if r.cancelled { "cancelled" } else { "done" },
                     r.cost,
+                    if unit.is_empty() { "" } else { " " },
                     r.wall_s,
                     r.evaluations,
                     if r.cancelled { "; best so far kept" } else { "" }
                 ));
                 shown.result = Some(r.params);
+                shown.calibration = Some(r);
             }
             Progress::Done(Err(e)) => shown.note = Some(format!("calibration failed: {e}")),
         });
@@ -388,10 +394,39 @@ impl ViewerState {
             self.start_validation();
         }
         let shown = &mut self.shown;
-        self.fem_probe.poll(|r| match r {
-            Ok(v) => shown.fem_probe = Some(v),
-            Err(e) => shown.note = Some(format!("FEM probe force failed: {e}")),
+        self.comparison.poll(|r| match r {
+            Ok(v) => shown.comparison = Some(v),
+            Err(e) => shown.note = Some(format!("the comparison of the press failed: {e}")),
         });
+        self.shown.comparing = self.comparison.busy();
+    }
+
+    /// Runs the calibration's result, keeping what ran before to show what changed.
+    fn apply_calibration(&mut self, send: &mut dyn FnMut(Command)) {
+        if let Some(p) = self.shown.result {
+            let from = self.shown.params;
+            let before = self.shown.validation.as_ref().and_then(|v| v.as_ref().ok()).copied();
+            self.handle(Request::EditParams(p), send);
+            self.shown.applied = Some(Applied { from, before, to: self.shown.params });
+        }
+    }
+
+    /// The physics thread's probe of its last published step: a sample of the force-depth plot
+    /// (from the first contact on, the depth and the force of that one step) and, while pressed,
+    /// the press a comparison is of.
+    pub fn observe_probe(&mut self, probe: Option<(crate::sim::press::Press, crate::sim::press::ProbeReading)>) {
+        let Some((press, reading)) = probe else { return };
+        if reading.depth_m > 0.0 {
+            self.shown.last_reading = Some((press, reading));
+        }
+        if self.shown.force_depth.is_empty() && reading.depth_m > 0.0 {
+            // The first contact: the sphere touching the surface at rest, no force yet (the first
+            // reading a frame sees may be deeper: the sphere glides between the hand's samples).
+            self.shown.force_depth.push([0.0, 0.0]);
+        }
+        if !self.shown.force_depth.is_empty() {
+            self.handle(Request::ForceSample([reading.depth_m * 1e3, reading.force_n]), &mut |_| {});
+        }
     }
 
     /// Whether a background job runs (the UI then redraws as its messages arrive).
@@ -399,7 +434,7 @@ impl ViewerState {
         self.fem.busy()
             || self.calibration.busy()
             || self.validation.busy()
-            || self.fem_probe.busy()
+            || self.comparison.busy()
             || self.compliance.busy()
     }
 }

@@ -44,7 +44,7 @@ impl ViewerState {
         self.shown.params = params;
         self.shown.case_active = None;
         self.shown.fem_answer = None;
-        self.shown.fem_probe = None;
+        self.shown.comparison = None;
         self.start_validation();
         send(Command::SetSurfaceProbe(None));
         send(Command::Replace(self.replacement()));
@@ -76,7 +76,7 @@ impl ViewerState {
         self.forget_map();
         self.shown.case_active = None;
         self.shown.fem_answer = None;
-        self.shown.fem_probe = None;
+        self.shown.comparison = None;
         self.shown.note = Some(format!(
             "{n}^3 nodes ({:.1} mm apart); a lattice carries its shipped tissue over by its stiffness scale",
             1e3 * grid.h()

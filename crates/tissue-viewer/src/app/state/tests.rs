@@ -30,8 +30,12 @@ fn applying_a_calibration_changes_topology_and_keeps_the_integrator_guard() {
     // A result of another lattice (the paper's axis springs), applied as the panel would.
     let axis = tissue_params(&state.shown.material, Topology::Axis).expect("shipped");
     state.shown.result = Some(axis);
+    let before = state.shown.params;
     state.handle(Request::ApplyCalibration, &mut send);
     assert_eq!(state.shown.topology(), Topology::Axis, "the topology follows the parameters");
+    // What ran before is kept to show what changed; an edit afterwards forgets it.
+    let applied = state.shown.applied.clone().expect("the Apply is remembered");
+    assert_eq!((applied.from, applied.to), (before, state.shown.params));
     let p = wait_until(&physics, |p| p.params == Some(axis));
     assert_eq!(p.params.map(|p| p.topology()), Some(Topology::Axis), "the running model agrees");
     // The automatic choice follows the new model's limit.
@@ -183,4 +187,29 @@ fn a_recording_names_the_object_or_the_material_file() {
         serde_json::from_str(&serde_json::to_string(&script).expect("JSON")).expect("reads back");
     let out = crate::study::script::run_from(&back, std::path::Path::new("/")).expect("replays from anywhere");
     assert_eq!(out.object, "my_tissue");
+}
+
+#[test]
+fn the_force_depth_plot_is_the_physics_readings_from_the_first_contact() {
+    let (mut state, _physics) = started();
+    let press = crate::sim::press::Press::normal([0.05, 0.05, 0.1], 0.015);
+    let reading = |depth_m: f64, force_n: f64| crate::sim::press::ProbeReading {
+        force: [0.0, 0.0, force_n],
+        force_n,
+        depth_m,
+        contact: crate::sim::press::Contact::Surface,
+        time_s: 0.0,
+    };
+    state.handle(Request::ProbeStarted, &mut |_| {});
+    // The first reading a frame sees may be past the touch: the plot starts at the touch.
+    state.observe_probe(Some((press.depth(7e-4), reading(7e-4, 0.8))));
+    state.observe_probe(Some((press.depth(2e-3), reading(2e-3, 3.1))));
+    // The same depth again (a held press settling): the sample is replaced, not added.
+    state.observe_probe(Some((press.depth(2e-3), reading(2e-3, 3.2))));
+    assert_eq!(state.shown.force_depth, vec![[0.0, 0.0], [0.7, 0.8], [2.0, 3.2]]);
+    let (kept, r) = state.shown.last_reading.expect("the reading a comparison compares");
+    assert_eq!((kept.depth, r.force_n), (2e-3, 3.2));
+    // Let go: the last pressed reading stays.
+    state.observe_probe(None);
+    assert_eq!(state.shown.last_reading.map(|(_, r)| r.force_n), Some(3.2));
 }
