@@ -186,10 +186,12 @@ fn presses() -> Vec<([f64; 3], f64)> {
     out
 }
 
-/// Objects A and B take their shipped compliance: nothing is computed or kept, `simulate`'s
-/// probe is the static press's, and on every press that the computed compliance solves the
-/// shipped one gives its force within 0.5 % (the tests' cache folder holds the computed one
-/// where an earlier run kept it, else it is computed here).
+/// Objects A and B take their shipped compliance: nothing is computed or kept and `simulate`'s
+/// probe is the static press's; on every press that A's computed compliance solves, the shipped
+/// one gives its force within 0.5 % (the tests' cache folder holds the computed one where an
+/// earlier run kept it, else it is computed here: about a minute and 3 GB, so only for A; B's
+/// shipped form is written and read by the same code, and `validate`'s slow test scores it
+/// against the material itself).
 #[test]
 #[ignore = "slow: in the slow group, cargo test --release -- --ignored"]
 fn objects_a_and_b_take_their_shipped_compliance() {
@@ -203,13 +205,19 @@ fn objects_a_and_b_take_their_shipped_compliance() {
         let (simulated, err) = simulate(&script, home.path());
         assert!(!err.contains("computing") && cache_lines(&err).is_empty(), "{err}");
         assert!(!home.path().join("tissue-sim").exists(), "nothing kept for {name}");
-        let full = computed(&material, tissue_core::io::cache_dir().as_deref(), &mut |_| true).expect("computed");
         let compact = shipped(&material).expect("shipped");
         let mut scratch = Default::default();
         let mut force = |c: &SurfaceCompliance, x: [f64; 3], r: f64| {
             tissue_core::sim::material_surface::compliance::SurfaceContactScratch::clear(&mut scratch);
             c.press(x, r, &mut scratch).ok().map(|f| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt())
         };
+        let held = force(&compact, [0.03, 0.05, 0.1 + 0.011], 0.015).expect("a press");
+        // The run's probe, held 0.2 s, near the static press (the material's slow modes lag).
+        assert!((simulated - held).abs() <= 0.05 * held, "{name}: simulate {simulated} N, the press {held} N");
+        if name != "A" {
+            continue;
+        }
+        let full = computed(&material, tissue_core::io::cache_dir().as_deref(), &mut |_| true).expect("computed");
         let (mut solved, mut worst) = (0, (0.0f64, 0));
         let all = presses();
         for (i, &(x, r)) in all.iter().enumerate() {
@@ -222,9 +230,6 @@ fn objects_a_and_b_take_their_shipped_compliance() {
         }
         eprintln!("{name}: {solved} presses, the shipped force within {:.3} % ({:?})", 100.0 * worst.0, all[worst.1]);
         assert!(solved > 80 && worst.0 < 5e-3, "{name}: {solved} presses, worst {worst:?}");
-        let held = force(&compact, [0.03, 0.05, 0.1 + 0.011], 0.015).expect("a press");
-        // The run's probe, held 0.2 s, near the static press (the material's slow modes lag).
-        assert!((simulated - held).abs() <= 0.05 * held, "{name}: simulate {simulated} N, the press {held} N");
     }
 }
 

@@ -40,11 +40,20 @@ pub struct Show {
 pub const ARROW_M_PER_N: f32 = 0.005;
 /// Line segments of each of the probe sphere's three circles.
 const CIRCLE_SEGMENTS: usize = 48;
+/// Latitude bands and longitude segments of a revealed lump's translucent sphere.
+const SPHERE_BANDS: usize = 12;
+/// Longitude segments of the translucent sphere.
+const SPHERE_SEGMENTS: usize = 24;
+/// Vertices of the translucent sphere (two triangles a cell).
+const SPHERE_VERTICES: usize = 6 * SPHERE_BANDS * SPHERE_SEGMENTS;
 
 /// The overlay buffers.
 pub struct Overlay {
-    /// Lines to draw (springs, nodes, fixed face).
+    /// Lines to draw (springs, nodes, fixed face), then the see-through triangles.
     pub lines: Vec<LineVertex>,
+    /// How many vertices at the end of `lines` are triangles seen through the surface (a revealed
+    /// lump's translucent sphere), not lines.
+    pub see_through: usize,
     /// The colour scalar per node, in [0, 1].
     pub scalar: Vec<f32>,
     /// The legend's range text.
@@ -61,7 +70,8 @@ impl Overlay {
     /// Buffers for `grid`.
     pub fn new(grid: &Grid) -> Self {
         Self {
-            lines: Vec::with_capacity(2 * 6000),
+            lines: Vec::with_capacity(2 * 6000 + SPHERE_VERTICES),
+            see_through: 0,
             scalar: vec![0.0; grid.num_nodes()],
             range: String::with_capacity(64),
             title: "",
@@ -164,6 +174,39 @@ impl Overlay {
         }
         self.push_tool(show, positions);
         self.push_lump(show);
+        // Last: the triangles the renderer draws through the surface.
+        let start = self.lines.len();
+        self.push_lump_sphere(show);
+        self.see_through = self.lines.len() - start;
+    }
+
+    /// A revealed lump as a translucent sphere seen through the tissue: triangles of a latitude
+    /// and longitude sphere, lit from above so that it reads as round.
+    fn push_lump_sphere(&mut self, show: Show) {
+        let Some((centre, radius, _)) = show.lump else { return };
+        if self.lines.len() + SPHERE_VERTICES > self.lines.capacity() {
+            return;
+        }
+        let (c, r) = (Vec3::from(centre.map(|v| v as f32)), radius as f32);
+        let point = |i: usize, j: usize| {
+            let (theta, phi) = (
+                std::f32::consts::PI * i as f32 / SPHERE_BANDS as f32,
+                std::f32::consts::TAU * j as f32 / SPHERE_SEGMENTS as f32,
+            );
+            Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+        };
+        let vertex = |n: Vec3| {
+            let light = 0.55 + 0.45 * n.dot(Vec3::new(0.3, -0.4, 0.87).normalize()).max(0.0);
+            LineVertex { position: (c + r * n).to_array(), colour: [light, 0.35 * light, 0.8 * light, 0.28] }
+        };
+        for i in 0..SPHERE_BANDS {
+            for j in 0..SPHERE_SEGMENTS {
+                let (a, b, d, e) = (point(i, j), point(i + 1, j), point(i + 1, j + 1), point(i, j + 1));
+                for n in [a, b, d, a, d, e] {
+                    self.lines.push(vertex(n));
+                }
+            }
+        }
     }
 
     /// A circle of `radius` about `centre` in the plane of `u` and `v`.
@@ -176,7 +219,8 @@ impl Overlay {
     }
 
     /// A revealed lump: three great circles of its sphere, its outline on the top face (just above
-    /// it, where the sphere would show through) and the person's mark as a cross there.
+    /// it, where the sphere would show through) and the person's mark as a cross there (its
+    /// translucent sphere: [`Overlay::push_lump_sphere`]).
     fn push_lump(&mut self, show: Show) {
         let Some((centre, radius, mark)) = show.lump else { return };
         let (c, r) = (Vec3::from(centre.map(|v| v as f32)), radius as f32);
@@ -365,5 +409,49 @@ impl ForceTrace {
             })
             .collect();
         painter.add(egui::Shape::line(points, egui::Stroke::new(1.5, egui::Color32::from_rgb(255, 170, 60))));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn show(lump: Option<([f64; 3], f64, [f64; 2])>) -> Show {
+        Show {
+            colour: ColourMode::Displacement,
+            springs: true,
+            nodes: false,
+            map_contrast: false,
+            fixed: true,
+            tool: Tool::Probe { centre: [0.05, 0.05, 0.114], radius: 0.015 },
+            tool_force: [0.0; 3],
+            lump,
+        }
+    }
+
+    #[test]
+    fn a_revealed_lump_is_a_translucent_sphere_after_the_lines() {
+        let grid = Grid::paper();
+        let mut overlay = Overlay::new(&grid);
+        let mut mesh = SurfaceMesh::new(&grid);
+        let positions = overlay.rest().to_vec();
+        let fixed = vec![false; grid.num_nodes()];
+        overlay.update(show(None), &positions, &fixed, None, None, &mut mesh);
+        assert_eq!(overlay.see_through, 0, "nothing to see through");
+        let lines = overlay.lines.len();
+        let (centre, radius) = ([0.065, 0.031, 0.1 - 0.0067 - 0.0096], 0.0096);
+        overlay.update(show(Some((centre, radius, [0.0585, 0.0393]))), &positions, &fixed, None, None, &mut mesh);
+        assert_eq!(overlay.see_through, SPHERE_VERTICES);
+        let sphere = &overlay.lines[overlay.lines.len() - SPHERE_VERTICES..];
+        assert!(overlay.lines.len() - SPHERE_VERTICES > lines, "the outline and the mark are lines before it");
+        for v in sphere {
+            let d = Vec3::from(v.position).distance(Vec3::from(centre.map(|c| c as f32)));
+            assert!((d - radius as f32).abs() < 1e-5, "on the lump's sphere: {d}");
+            assert!(v.colour[3] > 0.0 && v.colour[3] < 0.5, "translucent: alpha {}", v.colour[3]);
+        }
+        // No allocation per frame: the buffer's capacity holds it.
+        let capacity = overlay.lines.capacity();
+        overlay.update(show(Some((centre, radius, [0.05, 0.05]))), &positions, &fixed, None, None, &mut mesh);
+        assert_eq!(overlay.lines.capacity(), capacity);
     }
 }

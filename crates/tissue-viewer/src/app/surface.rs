@@ -52,8 +52,10 @@ pub struct CubeFrame<'a> {
     pub colour_map: bool,
     /// The surface mesh.
     pub mesh: &'a SurfaceMesh,
-    /// Overlay lines.
+    /// Overlay lines, then `see_through` vertices of triangles drawn through the surface.
     pub lines: &'a [LineVertex],
+    /// How many vertices at the end of `lines` are see-through triangles.
+    pub see_through: usize,
 }
 
 impl Surface {
@@ -204,7 +206,7 @@ impl Surface {
             ..Default::default()
         };
         self.cube.fit(&self.device, cube.mesh, cube.lines.len());
-        self.cube.prepare(&self.queue, (cube.view_proj)(vw / vh), style, cube.mesh, cube.lines);
+        self.cube.prepare(&self.queue, (cube.view_proj)(vw / vh), style, cube.mesh, cube.lines, cube.see_through);
         let mut encoder = self.device.create_command_encoder(&Default::default());
         self.egui_renderer.update_buffers(&self.device, &self.queue, &mut encoder, &egui.jobs, &screen);
         {

@@ -370,6 +370,7 @@ impl App {
                 || (s.show_map && self.state.shown.face_map.as_ref().is_some_and(Result::is_ok)),
             mesh: &self.mesh,
             lines: &self.overlay.lines,
+            see_through: self.overlay.see_through,
         };
         let egui = EguiFrame { jobs, textures: full.textures_delta, pixels_per_point: full.pixels_per_point };
         // `--screenshot` with `--frames N`: the last frame is read back as the window shows it.

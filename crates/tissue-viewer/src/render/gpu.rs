@@ -69,6 +69,7 @@ impl Default for SurfaceStyle {
 pub struct CubeRenderer {
     surface_pipeline: wgpu::RenderPipeline,
     line_pipeline: wgpu::RenderPipeline,
+    see_through_pipeline: wgpu::RenderPipeline,
     globals: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     vertices: wgpu::Buffer,
@@ -77,6 +78,7 @@ pub struct CubeRenderer {
     lines: wgpu::Buffer,
     line_capacity: u64,
     line_count: u32,
+    see_through_count: u32,
 }
 
 fn shader(device: &wgpu::Device, label: &str, source: &'static str) -> wgpu::ShaderModule {
@@ -202,6 +204,39 @@ impl CubeRenderer {
             multiview_mask: None,
             cache: None,
         });
+        // Translucent triangles seen through the surface (a revealed lump): the lines' shader and
+        // vertices, blended, with no depth test and no depth written.
+        let see_through_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("see-through"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &line_shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<LineVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &line_attrs,
+                })],
+            },
+            primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleList, ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &line_shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &target,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
         let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("surface vertices"),
             contents: bytemuck::cast_slice(&mesh.vertices),
@@ -222,6 +257,7 @@ impl CubeRenderer {
         Self {
             surface_pipeline,
             line_pipeline,
+            see_through_pipeline,
             globals,
             bind_group,
             vertices,
@@ -230,6 +266,7 @@ impl CubeRenderer {
             lines,
             line_capacity,
             line_count: 0,
+            see_through_count: 0,
         }
     }
 
@@ -261,7 +298,8 @@ impl CubeRenderer {
         }
     }
 
-    /// Uploads this frame's camera, surface and overlays (overlays beyond capacity are dropped).
+    /// Uploads this frame's camera, surface and overlays (overlays beyond capacity are dropped);
+    /// the last `see_through` vertices of `lines` are triangles drawn through the surface.
     pub fn prepare(
         &mut self,
         queue: &wgpu::Queue,
@@ -269,6 +307,7 @@ impl CubeRenderer {
         style: SurfaceStyle,
         mesh: &SurfaceMesh,
         lines: &[LineVertex],
+        see_through: usize,
     ) {
         let g = Globals {
             view_proj: view_proj.to_cols_array_2d(),
@@ -283,7 +322,10 @@ impl CubeRenderer {
         if n > 0 {
             queue.write_buffer(&self.lines, 0, bytemuck::cast_slice(&lines[..n]));
         }
-        self.line_count = n as u32;
+        // The see-through triangles come last; where the buffer cut them, none are drawn.
+        let see_through = if n == lines.len() { see_through.min(n) } else { 0 };
+        self.line_count = (n - see_through) as u32;
+        self.see_through_count = see_through as u32;
     }
 
     /// Records the draw calls into a pass that has a colour target of the pipeline's format and a
@@ -298,6 +340,11 @@ impl CubeRenderer {
             pass.set_pipeline(&self.line_pipeline);
             pass.set_vertex_buffer(0, self.lines.slice(..));
             pass.draw(0..self.line_count, 0..1);
+        }
+        if self.see_through_count > 0 {
+            pass.set_pipeline(&self.see_through_pipeline);
+            pass.set_vertex_buffer(0, self.lines.slice(..));
+            pass.draw(self.line_count..self.line_count + self.see_through_count, 0..1);
         }
     }
 }

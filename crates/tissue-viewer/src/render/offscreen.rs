@@ -66,7 +66,7 @@ impl Headless {
         }
         let device = &self.device;
         let mut renderer = CubeRenderer::new(device, FORMAT, mesh, lines.len());
-        renderer.prepare(&self.queue, view_proj, style, mesh, lines);
+        renderer.prepare(&self.queue, view_proj, style, mesh, lines, 0);
         let target = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("offscreen"),
             size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
