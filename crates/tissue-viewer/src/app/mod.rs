@@ -13,6 +13,7 @@
 //!   and forwards input.
 
 pub mod calibration_job;
+pub mod dent;
 pub mod exercise;
 pub mod face_map;
 pub mod gestures;

@@ -9,7 +9,6 @@ use glam::Vec3;
 use crate::app::face_map::FaceMap;
 use crate::mechanics::grid::{CUBE_SIDE_M, Grid};
 use crate::render::gpu::LineVertex;
-use crate::render::mesh::SurfaceMesh;
 use crate::render::scene::ColourMode;
 use crate::render::{fixed_outline, lattice_edges, normalise, push_edges};
 use crate::sim::Tool;
@@ -56,6 +55,9 @@ pub struct Overlay {
     pub see_through: usize,
     /// The colour scalar per node, in [0, 1].
     pub scalar: Vec<f32>,
+    /// In the displacement colour map, the scalar per metre of displacement (the dent's vertices
+    /// are coloured by it).
+    pub per_metre: Option<f32>,
     /// The legend's range text.
     pub range: String,
     /// The legend's title.
@@ -72,6 +74,7 @@ impl Overlay {
         Self {
             lines: Vec::with_capacity(2 * 6000 + SPHERE_VERTICES),
             see_through: 0,
+            per_metre: None,
             scalar: vec![0.0; grid.num_nodes()],
             range: String::with_capacity(64),
             title: "",
@@ -86,8 +89,11 @@ impl Overlay {
         &self.rest
     }
 
-    /// Recomputes the scalar, its range text, the surface mesh and the lines for `positions`;
-    /// with `map`, the scalar is the palpation map's force on its face.
+    /// Recomputes the scalar, its range text and the lines for `positions` (the largest
+    /// displacement of the dent under the probe, `dented` metres, counted in the colour map's
+    /// range); with `map`, the scalar is the palpation map's force on its face. The surface mesh
+    /// takes the scalar after ([`crate::render::mesh::SurfaceMesh::update_dented`] with
+    /// [`Overlay::per_metre`]).
     pub fn update(
         &mut self,
         show: Show,
@@ -95,9 +101,10 @@ impl Overlay {
         fixed: &[bool],
         fem: Option<&[[f64; 3]]>,
         map: Option<&FaceMap>,
-        mesh: &mut SurfaceMesh,
+        dented: f32,
     ) {
         let mut max = None;
+        self.per_metre = None;
         self.range.clear();
         self.ends.iter_mut().for_each(String::clear);
         self.title = match show.colour {
@@ -132,8 +139,10 @@ impl Overlay {
                 for (s, (p, r)) in self.scalar.iter_mut().zip(positions.iter().zip(&self.rest)) {
                     *s = Vec3::from(*p).distance(Vec3::from(*r));
                 }
-                let m = 0.002f32.max(self.scalar.iter().copied().fold(0.0, f32::max));
+                // The dent under the probe counts: the material's displacement there.
+                let m = 0.002f32.max(self.scalar.iter().copied().fold(dented, f32::max));
                 max = Some(m);
+                self.per_metre = Some(1.0 / m);
                 let _ = write!(self.range, "0 .. {:.2} mm", m * 1e3);
             }
             (ColourMode::Error, Some(fem)) => {
@@ -150,7 +159,6 @@ impl Overlay {
             }
         }
         normalise(&mut self.scalar, max);
-        mesh.update(positions, Some(&self.scalar));
         self.lines.clear();
         if show.fixed {
             fixed_outline(&self.edges, positions, fixed, [0.2, 0.9, 0.3, 1.0], &mut self.lines);
@@ -175,17 +183,15 @@ impl Overlay {
         self.push_tool(show, positions);
         self.push_lump(show);
         // Last: the triangles the renderer draws through the surface.
-        let start = self.lines.len();
-        self.push_lump_sphere(show);
-        self.see_through = self.lines.len() - start;
+        self.see_through = self.push_lump_sphere(show);
     }
 
     /// A revealed lump as a translucent sphere seen through the tissue: triangles of a latitude
-    /// and longitude sphere, lit from above so that it reads as round.
-    fn push_lump_sphere(&mut self, show: Show) {
-        let Some((centre, radius, _)) = show.lump else { return };
+    /// and longitude sphere, lit from above so that it reads as round; how many vertices.
+    fn push_lump_sphere(&mut self, show: Show) -> usize {
+        let Some((centre, radius, _)) = show.lump else { return 0 };
         if self.lines.len() + SPHERE_VERTICES > self.lines.capacity() {
-            return;
+            return 0;
         }
         let (c, r) = (Vec3::from(centre.map(|v| v as f32)), radius as f32);
         let point = |i: usize, j: usize| {
@@ -207,6 +213,7 @@ impl Overlay {
                 }
             }
         }
+        SPHERE_VERTICES
     }
 
     /// A circle of `radius` about `centre` in the plane of `u` and `v`.
@@ -433,14 +440,13 @@ mod tests {
     fn a_revealed_lump_is_a_translucent_sphere_after_the_lines() {
         let grid = Grid::paper();
         let mut overlay = Overlay::new(&grid);
-        let mut mesh = SurfaceMesh::new(&grid);
         let positions = overlay.rest().to_vec();
         let fixed = vec![false; grid.num_nodes()];
-        overlay.update(show(None), &positions, &fixed, None, None, &mut mesh);
+        overlay.update(show(None), &positions, &fixed, None, None, 0.0);
         assert_eq!(overlay.see_through, 0, "nothing to see through");
         let lines = overlay.lines.len();
         let (centre, radius) = ([0.065, 0.031, 0.1 - 0.0067 - 0.0096], 0.0096);
-        overlay.update(show(Some((centre, radius, [0.0585, 0.0393]))), &positions, &fixed, None, None, &mut mesh);
+        overlay.update(show(Some((centre, radius, [0.0585, 0.0393]))), &positions, &fixed, None, None, 0.0);
         assert_eq!(overlay.see_through, SPHERE_VERTICES);
         let sphere = &overlay.lines[overlay.lines.len() - SPHERE_VERTICES..];
         assert!(overlay.lines.len() - SPHERE_VERTICES > lines, "the outline and the mark are lines before it");
@@ -451,7 +457,7 @@ mod tests {
         }
         // No allocation per frame: the buffer's capacity holds it.
         let capacity = overlay.lines.capacity();
-        overlay.update(show(Some((centre, radius, [0.05, 0.05]))), &positions, &fixed, None, None, &mut mesh);
+        overlay.update(show(Some((centre, radius, [0.05, 0.05]))), &positions, &fixed, None, None, 0.0);
         assert_eq!(overlay.lines.capacity(), capacity);
     }
 }

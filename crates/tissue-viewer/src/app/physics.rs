@@ -120,6 +120,9 @@ pub struct Published {
     /// The probe of the last step while it is pressed: the press of that step (where the sphere
     /// is drawn) and its reading (the force shown beside it, in the panel and on the plot).
     pub probe: Option<(crate::sim::press::Press, crate::sim::press::ProbeReading)>,
+    /// That step's contact on the material's surface compliance (surface node, the sphere's
+    /// normal there, force; empty without one): the dent the view draws.
+    pub contact: Vec<(usize, [f64; 3], f64)>,
 }
 
 /// The physics thread died (the channel is closed).
@@ -140,7 +143,10 @@ impl PhysicsThread {
     /// what the hand does where `recording` ([`super::recording`]).
     pub fn spawn(first: Replacement, recording: bool) -> std::io::Result<Self> {
         let (tx, rx) = channel();
-        let shared = Arc::new(Mutex::new(Published::default()));
+        let mut published = Published::default();
+        // The contact's bound, so that publishing it never allocates.
+        published.contact.reserve(crate::sim::material_surface::compliance::MAX_CONTACT_NODES);
+        let shared = Arc::new(Mutex::new(published));
         let out = Arc::clone(&shared);
         let worker = Worker::spawn(
             "physics",
@@ -349,6 +355,7 @@ impl Clone for Published {
         into.revision = p.revision;
         into.surface_probe = p.surface_probe;
         into.probe = p.probe;
+        into.contact.clone_from(&p.contact);
     }
 }
 
@@ -356,6 +363,12 @@ impl Published {
     /// Records the running simulation's state (the physics thread's one writer of it).
     fn record(&mut self, sim: &Simulation, rates: Rates, state: &Loop, totals: (u64, u64, f64)) {
         self.probe = state.timeline.reading(sim);
+        self.contact.clear();
+        if self.probe.is_some() {
+            // At most the contact's bound of nodes: within the capacity reserved at the start.
+            self.contact
+                .extend(sim.surface_contact().take(crate::sim::material_surface::compliance::MAX_CONTACT_NODES));
+        }
         let p = self;
         let n = sim.tissue.grid().num_nodes();
         p.positions.resize(n, [0.0; 3]);

@@ -42,7 +42,10 @@ struct App {
     study: StudyPanel,
     camera: OrbitCamera,
     gesture: Gesture,
+    /// The surface as drawn, on the material's lattice ([`super::dent`]).
     mesh: SurfaceMesh,
+    /// The vertices near the probe's contact and where the material puts them, this frame.
+    dent: Vec<crate::render::mesh::Dent>,
     overlay: Overlay,
     /// The probe's recent force, drawn next to the sphere.
     trace: ForceTrace,
@@ -123,12 +126,17 @@ impl App {
             egui,
             physics,
             physics_stopped: None,
-            latest: Published::default(),
+            latest: {
+                let mut p = Published::default();
+                p.contact.reserve(crate::sim::material_surface::compliance::MAX_CONTACT_NODES);
+                p
+            },
             state,
             study: StudyPanel::default(),
             camera: OrbitCamera::default(),
             gesture: Gesture::None,
-            mesh: SurfaceMesh::new(&grid),
+            mesh: super::dent::display_mesh(&grid),
+            dent: Vec::with_capacity(super::dent::MAX_DENT),
             overlay: Overlay::new(&grid),
             trace: ForceTrace::default(),
             requests,
@@ -327,7 +335,7 @@ impl App {
         let n = grid.num_nodes();
         if self.overlay.rest().len() != n {
             // Another resolution: the surface and overlays of the new grid.
-            self.mesh = SurfaceMesh::new(&grid);
+            self.mesh = super::dent::display_mesh(&grid);
             self.overlay = Overlay::new(&grid);
         }
         if self.latest.positions.len() != n {
@@ -352,7 +360,22 @@ impl App {
         let fem = self.state.shown.fem_answer.as_deref();
         let map =
             self.state.shown.face_map.as_ref().and_then(|m| m.as_ref().ok()).filter(|_| self.state.settings.show_map);
-        self.overlay.update(show, &self.latest.positions, &self.latest.fixed, fem, map, &mut self.mesh);
+        match (self.state.felt_compliance(), self.latest.probe) {
+            (Some(c), Some((press, _))) if self.latest.surface_probe => {
+                let sphere = (press.centre(), press.radius);
+                super::dent::fill(&mut self.dent, &self.mesh, c, &self.latest.contact, sphere);
+            }
+            _ => self.dent.clear(),
+        }
+        let mesh = &self.mesh;
+        let dented = self
+            .dent
+            .iter()
+            .map(|d| glam::Vec3::from(d.at).distance(glam::Vec3::from(mesh.rest_of(d.vertex))))
+            .fold(0.0, f32::max);
+        self.overlay.update(show, &self.latest.positions, &self.latest.fixed, fem, map, dented);
+        let scalar = Some(self.overlay.scalar.as_slice());
+        self.mesh.update_dented(&self.latest.positions, scalar, &self.dent, self.overlay.per_metre);
         let Some(surface) = self.surface.as_mut() else { return Ok(()) };
         surface.egui_state.handle_platform_output(&surface.window, full.platform_output);
         self.repaint_after = full

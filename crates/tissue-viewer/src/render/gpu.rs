@@ -242,11 +242,7 @@ impl CubeRenderer {
             contents: bytemuck::cast_slice(&mesh.vertices),
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
         });
-        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("surface indices"),
-            contents: bytemuck::cast_slice(&mesh.indices),
-            usage: wgpu::BufferUsages::INDEX,
-        });
+        let indices = index_buffer(device, mesh);
         let line_capacity = max_line_vertices.max(2) as u64;
         let lines = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("line vertices"),
@@ -262,7 +258,7 @@ impl CubeRenderer {
             bind_group,
             vertices,
             indices,
-            index_count: mesh.indices.len() as u32,
+            index_count: 0,
             lines,
             line_capacity,
             line_count: 0,
@@ -274,18 +270,14 @@ impl CubeRenderer {
     /// creating them again where they do not.
     pub fn fit(&mut self, device: &wgpu::Device, mesh: &SurfaceMesh, max_line_vertices: usize) {
         let vertex_bytes = std::mem::size_of_val(mesh.vertices.as_slice()) as u64;
-        if vertex_bytes != self.vertices.size() || mesh.indices.len() as u32 != self.index_count {
+        let index_bytes = (mesh.index_capacity() * std::mem::size_of::<u32>()) as u64;
+        if vertex_bytes != self.vertices.size() || index_bytes != self.indices.size() {
             self.vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("surface vertices"),
                 contents: bytemuck::cast_slice(&mesh.vertices),
                 usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             });
-            self.indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("surface indices"),
-                contents: bytemuck::cast_slice(&mesh.indices),
-                usage: wgpu::BufferUsages::INDEX,
-            });
-            self.index_count = mesh.indices.len() as u32;
+            self.indices = index_buffer(device, mesh);
         }
         if max_line_vertices as u64 > self.line_capacity {
             self.line_capacity = max_line_vertices as u64;
@@ -318,6 +310,10 @@ impl CubeRenderer {
         };
         queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         queue.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&mesh.vertices));
+        // The triangles drawn this frame (a face's whole lattice only where the dent is).
+        let drawn = mesh.indices.len().min(mesh.index_capacity());
+        queue.write_buffer(&self.indices, 0, bytemuck::cast_slice(&mesh.indices[..drawn]));
+        self.index_count = drawn as u32;
         let n = (lines.len() as u64).min(self.line_capacity) as usize;
         if n > 0 {
             queue.write_buffer(&self.lines, 0, bytemuck::cast_slice(&lines[..n]));
@@ -347,6 +343,16 @@ impl CubeRenderer {
             pass.draw(self.line_count..self.line_count + self.see_through_count, 0..1);
         }
     }
+}
+
+/// An index buffer for the most triangles `mesh` draws in a frame, written each frame.
+fn index_buffer(device: &wgpu::Device, mesh: &SurfaceMesh) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("surface indices"),
+        size: (mesh.index_capacity().max(3) * std::mem::size_of::<u32>()) as u64,
+        usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// Begins the cube's render pass: clears `view` to `clear` and `depth` to the far plane.

@@ -201,6 +201,15 @@ impl SurfaceProbe {
     pub fn loads(&self) -> &[(usize, [f64; 3])] {
         &self.loads
     }
+
+    /// The contact of the last solve on the compliance's surface nodes: node, the sphere's
+    /// normal there (away from its centre) and the normal force, newtons (none while the sphere
+    /// is clear of the surface). [`SurfaceCompliance::near_contact`] turns it into the
+    /// surface's shape under the sphere.
+    pub fn contact(&self) -> impl Iterator<Item = (usize, [f64; 3], f64)> + '_ {
+        self.scratch.contacts()
+    }
+
 }
 
 /// What the probe needs of a material: its surface compliance and its slow modes.
@@ -499,6 +508,50 @@ mod tests {
         let mut other = Material::object_a();
         other.stiffness *= 2.0;
         assert!(shipped(&other).is_none());
+    }
+
+    /// Under a press the material's displacement puts every contact node on the sphere (the
+    /// contact's own condition, read back through the compliance's blocks), on the top face, on
+    /// a side, across an edge and at 3/4 of the radius deep; nodes beyond the rim stay outside it.
+    #[test]
+    fn the_displacement_under_a_press_puts_the_contact_on_the_sphere() {
+        let compliance = shipped(&Material::object_a()).expect("A's");
+        let r = 0.015;
+        // The farthest contact node's distance from the sphere, measured: 0.007 mm at 2 mm deep,
+        // 0.059 at 4, 0.31 at 8 and 0.57 at 3/4 of the radius on the top face, 0.087 mm 4 mm into
+        // +x, 0.007 across the edge (the linear contact lets a node slide along the sphere's
+        // normal at rest; the viewer draws the contact nodes on the sphere).
+        for (centre, what, within) in [
+            ([0.05, 0.05, 0.1 + r - 0.002], "top, 2 mm", 2e-5),
+            ([0.05, 0.05, 0.1 + r - 0.004], "top, 4 mm", 1e-4),
+            ([0.04, 0.06, 0.1 + r - 0.008], "top, 8 mm", 5e-4),
+            ([0.04, 0.06, 0.1 + r - 0.75 * r], "top, 3/4 of the radius", 8e-4),
+            ([0.1 + r - 0.004, 0.05, 0.06], "+x, 4 mm", 1.5e-4),
+            ([0.1 + 0.6 * r, 0.05, 0.1 + 0.6 * r], "the top/+x edge", 2e-5),
+        ] {
+            let mut scratch = SurfaceContactScratch::default();
+            compliance.press(centre, r, &mut scratch).expect("a press");
+            let contact: Vec<(usize, [f64; 3], f64)> = scratch.contacts().collect();
+            let contacts: Vec<usize> = contact.iter().map(|c| c.0).collect();
+            assert!(contacts.len() > 10, "{what}: {} contact nodes", contacts.len());
+            let (mut worst, mut outside, mut held) = (0.0f64, 0, 0);
+            compliance.near_contact(&contact, 0.01, |q, x, distance, u| {
+                let y: [f64; 3] = std::array::from_fn(|a| x[a] + u[a]);
+                let from_centre = (0..3).map(|a| (y[a] - centre[a]).powi(2)).sum::<f64>().sqrt();
+                if contacts.contains(&q) {
+                    // Frictionless: a contact node also slides along the sphere, off it by a little.
+                    assert_eq!(distance, 0.0);
+                    worst = worst.max((from_centre - r).abs());
+                    held += 1;
+                } else {
+                    assert!(from_centre > r - within, "{what}: node {q} ends inside the sphere");
+                    outside += 1;
+                }
+            });
+            assert_eq!(held, contacts.len(), "{what}: every contact node is near the contact");
+            assert!(worst < within, "{what}: a contact node {worst} m off the sphere");
+            assert!(outside > 20, "{what}: {outside} nodes near the contact");
+        }
     }
 
     /// One scratch pressed at the same place on two compliances gives each its own force: the

@@ -19,6 +19,12 @@ impl Simulation {
         self.surface_probe.is_some()
     }
 
+    /// The probe's contact on the material's surface compliance, where it has one: the surface
+    /// nodes the sphere holds, the sphere's normal at each and its force.
+    pub fn surface_contact(&self) -> impl Iterator<Item = (usize, [f64; 3], f64)> + '_ {
+        self.surface_probe.iter().flat_map(|p| p.contact())
+    }
+
     /// Puts the tool's loads on the tissue. A probe takes its force from the material's surface
     /// compliance where the simulation has one; a contact that cannot be
     /// solved there is an error naming its cause (never another contact's force under its name).

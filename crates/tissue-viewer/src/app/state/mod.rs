@@ -411,6 +411,11 @@ impl ViewerState {
         }
     }
 
+    /// The felt material's surface compliance, once loaded (the probe's contact is on it).
+    pub fn felt_compliance(&self) -> Option<&Arc<SurfaceCompliance>> {
+        self.compliances.as_ref().map(|[felt, _]| felt)
+    }
+
     /// The physics thread's probe of its last published step: a sample of the force-depth plot
     /// (from the first contact on, the depth and the force of that one step) and, while pressed,
     /// the press a comparison is of.

@@ -181,6 +181,94 @@ impl SurfaceCompliance {
         Some(v)
     }
 
+    /// The 3 x 3 block `W(q <- p)` (metres per newton: the displacement of surface node `q`, row,
+    /// under a unit force at `p`, column) from `p`'s column (`source`), or from `q`'s transposed
+    /// (the compliance is symmetric) where `p`'s does not hold `q`; `None` where neither does.
+    fn block(&self, (p, source): ([usize; 3], &Source), q: [usize; 3]) -> Option<[[f64; 3]; 3]> {
+        let read = |source: &Source, at: [usize; 3]| -> Option<[[f64; 3]; 3]> {
+            let t = self.lattice.target(source, at)?;
+            let f = &self.lattice.families[source.family as usize];
+            let sign = [f64::from(u8::from(!source.flip[0])) * 2.0 - 1.0, f64::from(u8::from(!source.flip[1])) * 2.0 - 1.0, 1.0];
+            let base = f.offset + 9 * (source.column as usize * f.targets.len() + t);
+            let block = &self.columns[base..base + 9];
+            // block[3 b + a]: displacement component a under force component b, mirrored.
+            Some(std::array::from_fn(|a| std::array::from_fn(|b| f64::from(block[3 * b + a]) * sign[a] * sign[b])))
+        };
+        read(source, q).or_else(|| {
+            let w = read(&self.lattice.source(q), p)?;
+            Some(std::array::from_fn(|a| std::array::from_fn(|b| w[b][a])))
+        })
+    }
+
+    /// Every surface node within `reach` of `contact`'s nodes (a press's contact:
+    /// [`SurfaceContactScratch::contacts`], each node pushed along the sphere's normal there, away
+    /// from its centre, by its force) with `f(node, rest position, distance to the nearest contact
+    /// node, the material's static displacement there)`, metres: what the surface does under the
+    /// sphere at the compliance's resolution (the inclusions' correction left out; zero where no
+    /// column holds the node, far from the contact on another face). At most
+    /// [`MAX_CONTACT_NODES`] contact nodes are read; allocates nothing.
+    pub fn near_contact(
+        &self,
+        contact: &[(usize, [f64; 3], f64)],
+        reach: f64,
+        mut f: impl FnMut(usize, [f64; 3], f64, [f64; 3]),
+    ) {
+        let contact = &contact[..contact.len().min(MAX_CONTACT_NODES)];
+        let mut points = [[0usize; 3]; MAX_CONTACT_NODES];
+        let mut sources = [Source::default(); MAX_CONTACT_NODES];
+        let mut at = [[0.0f64; 3]; MAX_CONTACT_NODES];
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for (i, &(p, _, _)) in contact.iter().enumerate() {
+            points[i] = self.lattice.point(p);
+            sources[i] = self.lattice.source(points[i]);
+            at[i] = self.position(p);
+            for a in 0..3 {
+                lo[a] = lo[a].min(at[i][a] - reach);
+                hi[a] = hi[a].max(at[i][a] + reach);
+            }
+        }
+        if contact.is_empty() {
+            return;
+        }
+        let coords = &self.lattice.coords;
+        let range = |a: usize| coords.partition_point(|&c| c < lo[a])..coords.partition_point(|&c| c <= hi[a]);
+        for k in range(2) {
+            for j in range(1) {
+                for i in range(0) {
+                    let q = [i, j, k];
+                    let Some(node) = self.lattice.index(q) else { continue };
+                    let x = self.position(node);
+                    let d2 = at[..contact.len()]
+                        .iter()
+                        .map(|y| (0..3).map(|a| (x[a] - y[a]).powi(2)).sum::<f64>())
+                        .fold(f64::INFINITY, f64::min);
+                    if d2 > reach * reach {
+                        continue;
+                    }
+                    let mut u = [0.0; 3];
+                    for (c, &(_, n, force)) in contact.iter().enumerate() {
+                        let Some(w) = self.block((points[c], &sources[c]), q) else { continue };
+                        for (a, row) in w.iter().enumerate() {
+                            u[a] += force * (row[0] * n[0] + row[1] * n[1] + row[2] * n[2]);
+                        }
+                    }
+                    f(node, x, d2.sqrt(), u);
+                }
+            }
+        }
+    }
+
+    /// The lattice's node coordinates along each axis, metres (the same on every axis).
+    pub fn coordinates(&self) -> &[f64] {
+        &self.lattice.coords
+    }
+
+    /// The surface node at lattice point `q` (indices into [`SurfaceCompliance::coordinates`]), if it is one.
+    pub fn node_at(&self, q: [usize; 3]) -> Option<usize> {
+        self.lattice.index(q)
+    }
+
     /// The force of the surface on a rigid frictionless sphere (`centre`, `radius`, metres) held
     /// against it at rest, newtons: every surface node the sphere covers is put on it along the
     /// sphere's normal ([`contact::solve`], warm-started from the last solve's contact where it
