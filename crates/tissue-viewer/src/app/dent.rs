@@ -47,7 +47,8 @@ pub fn fill(
     (centre, radius): ([f64; 3], f64),
 ) {
     dent.clear();
-    if contact.is_empty() {
+    // The mesh stands on the lattice of DEFAULT_DIVISIONS: another's nodes are not its vertices.
+    if contact.is_empty() || compliance.lattice_size().0 != DEFAULT_DIVISIONS {
         return;
     }
     let c = DVec3::from(centre);

@@ -113,7 +113,9 @@ impl Timeline {
         if sim.tool == Tool::None && (sim.time_s == 0.0 || untouched) {
             self.restart();
         } else {
-            self.close(sim.dt);
+            // A probe held goes on being held (and read) where it is; nothing is recorded until
+            // the tissue is at rest with nothing held.
+            self.split(sim.dt);
             self.waiting = Some(0);
             self.note = Some(format!(
                 "a setting changed at t = {:.3} s of the viewer's simulation and the tissue has not come to rest \

@@ -96,8 +96,9 @@ fn a_recorded_interaction_replays_to_the_same_forces() {
     assert_eq!(last.tool_force_n, end);
 }
 
-/// A setting changed halfway: nothing is recorded until the tissue rests with nothing held, and
-/// the recording says from when it runs.
+/// A setting changed halfway (the material's contact arriving under a held press, say): the probe
+/// stays held and read, nothing is recorded until the tissue rests with nothing held, and the
+/// recording says from when it runs.
 #[test]
 fn after_a_setting_changes_the_recording_starts_again_at_rest() {
     let mut sim = viewer_sim();
@@ -107,6 +108,9 @@ fn after_a_setting_changes_the_recording_starts_again_at_rest() {
     steps(&mut t, &mut sim, 500);
     t.setting_changed(&sim);
     steps(&mut t, &mut sim, 100);
+    // The probe held goes on being held where it was, and read.
+    let (held, reading) = t.reading(&sim).expect("the probe is still read");
+    assert_eq!((held.at, held.depth, reading.depth_m), (p.at, p.depth, p.depth));
     let waiting = t.recording(&sim);
     assert!(waiting.force_path.is_empty() && waiting.note.is_some());
     t.set_tool(Tool::None, &mut sim);
