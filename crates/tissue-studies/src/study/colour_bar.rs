@@ -41,17 +41,7 @@ pub fn annotated_png(
         }
     }
     draw(&mut rgb, out, (w, h), bar, caption).map_err(|e| format!("cannot draw the colour bar: {e}"))?;
-    let mut png = std::io::Cursor::new(Vec::new());
-    image::write_buffer_with_format(
-        &mut png,
-        &rgb,
-        out.0,
-        out.1,
-        image::ExtendedColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| format!("cannot encode the picture: {e}"))?;
-    Ok(png.into_inner())
+    crate::study::font::png(&rgb, out)
 }
 
 fn draw<'a>(

@@ -19,10 +19,7 @@ pub fn png(map: &PalpationMap) -> Result<Vec<u8>, String> {
     let (w, h) = SIZE;
     let mut rgb = vec![255u8; (3 * w * h) as usize];
     draw(map, &mut rgb).map_err(|e| format!("cannot draw the map: {e}"))?;
-    let mut out = std::io::Cursor::new(Vec::new());
-    image::write_buffer_with_format(&mut out, &rgb, w, h, image::ExtendedColorType::Rgb8, image::ImageFormat::Png)
-        .map_err(|e| format!("cannot encode the map: {e}"))?;
-    Ok(out.into_inner())
+    crate::study::font::png(&rgb, SIZE)
 }
 
 /// Draws `map` into the RGB buffer of [`SIZE`].

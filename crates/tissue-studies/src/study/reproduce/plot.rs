@@ -29,17 +29,8 @@ pub fn line_panels(title: &str, x_label: &str, panels: &[(&str, &str, Vec<Series
     draw(SVGBackend::with_string(&mut svg, size).into_drawing_area(), title, x_label, panels)?;
     let mut rgb = vec![255u8; 3 * (size.0 * size.1) as usize];
     draw(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area(), title, x_label, panels)?;
-    let mut png = std::io::Cursor::new(Vec::new());
-    image::write_buffer_with_format(
-        &mut png,
-        &rgb,
-        size.0,
-        size.1,
-        image::ExtendedColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| anyhow::anyhow!("cannot encode the figure: {e}"))?;
-    Ok(Figure { svg, png: png.into_inner() })
+    let png = crate::study::font::png(&rgb, size).map_err(anyhow::Error::msg)?;
+    Ok(Figure { svg, png })
 }
 
 /// Draws the panels on `root`, whatever its backend.
