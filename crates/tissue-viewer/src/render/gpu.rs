@@ -136,11 +136,11 @@ impl CubeRenderer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let depth = |write: bool| {
+        let depth = |write: bool, compare: wgpu::CompareFunction| {
             Some(wgpu::DepthStencilState {
                 format: DEPTH_FORMAT,
                 depth_write_enabled: Some(write),
-                depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                depth_compare: Some(compare),
                 stencil: Default::default(),
                 bias: Default::default(),
             })
@@ -167,7 +167,7 @@ impl CubeRenderer {
                 })],
             },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: depth(true),
+            depth_stencil: depth(true, wgpu::CompareFunction::LessEqual),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &surface_shader,
@@ -207,17 +207,12 @@ impl CubeRenderer {
                 cache: None,
             })
         };
-        let line_pipeline = overlay("lines", wgpu::PrimitiveTopology::LineList, depth(false));
+        let line_pipeline =
+            overlay("lines", wgpu::PrimitiveTopology::LineList, depth(false, wgpu::CompareFunction::LessEqual));
         // Translucent triangles seen through the surface (a revealed lump): no depth test and no
         // depth written.
-        let through = wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(false),
-            depth_compare: Some(wgpu::CompareFunction::Always),
-            stencil: Default::default(),
-            bias: Default::default(),
-        };
-        let see_through_pipeline = overlay("see-through", wgpu::PrimitiveTopology::TriangleList, Some(through));
+        let through = depth(false, wgpu::CompareFunction::Always);
+        let see_through_pipeline = overlay("see-through", wgpu::PrimitiveTopology::TriangleList, through);
         let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("surface vertices"),
             contents: bytemuck::cast_slice(&mesh.vertices),

@@ -259,16 +259,6 @@ impl SurfaceCompliance {
         }
     }
 
-    /// The lattice's node coordinates along each axis, metres (the same on every axis).
-    pub fn coordinates(&self) -> &[f64] {
-        &self.lattice.coords
-    }
-
-    /// The surface node at lattice point `q` (indices into [`SurfaceCompliance::coordinates`]), if it is one.
-    pub fn node_at(&self, q: [usize; 3]) -> Option<usize> {
-        self.lattice.index(q)
-    }
-
     /// The force of the surface on a rigid frictionless sphere (`centre`, `radius`, metres) held
     /// against it at rest, newtons: every surface node the sphere covers is put on it along the
     /// sphere's normal ([`contact::solve`], warm-started from the last solve's contact where it
